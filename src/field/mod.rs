@@ -1,0 +1,328 @@
+//! The scalar field: a regular grid of values, its spacing, and the total
+//! order on its vertices.
+//!
+//! Values are kept in the type the file had (a uint8 CT scan stays one byte
+//! per voxel). The engine never compares values directly: it works on the
+//! *vertex order* ([`ScalarField::vertex_order`]), the vertices sorted by
+//! value with ties broken by vertex id (simulation of simplicity), so every
+//! vertex has a distinct place and the contour tree is well defined.
+//!
+//! Vertex ids are `u32`: `id = x + X * (y + Y * z)`. The engine reserves the
+//! top bit of some per-vertex words, so a field holds at most
+//! [`MAX_VERTICES`] vertices (about 1290^3).
+
+pub mod io;
+mod order;
+pub mod synthetic;
+
+pub use order::vertex_order;
+
+use thiserror::Error;
+
+/// The largest number of vertices the engine accepts (ids are `u32` and the
+/// top bit is reserved).
+pub const MAX_VERTICES: usize = (1 << 31) - 1;
+
+/// The values of a field, in the compact type they were stored in.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values {
+    /// Unsigned 8-bit.
+    U8(Vec<u8>),
+    /// Signed 8-bit.
+    I8(Vec<i8>),
+    /// Unsigned 16-bit.
+    U16(Vec<u16>),
+    /// Signed 16-bit.
+    I16(Vec<i16>),
+    /// Unsigned 32-bit.
+    U32(Vec<u32>),
+    /// Signed 32-bit.
+    I32(Vec<i32>),
+    /// 32-bit float (never NaN or infinite once in a [`ScalarField`]).
+    F32(Vec<f32>),
+    /// 64-bit float (never NaN or infinite once in a [`ScalarField`]).
+    F64(Vec<f64>),
+}
+
+/// Runs `$body` with `$v` bound to the typed slice inside a [`Values`].
+#[macro_export]
+macro_rules! with_values {
+    ($values:expr, $v:ident => $body:expr) => {
+        match $values {
+            $crate::field::Values::U8($v) => $body,
+            $crate::field::Values::I8($v) => $body,
+            $crate::field::Values::U16($v) => $body,
+            $crate::field::Values::I16($v) => $body,
+            $crate::field::Values::U32($v) => $body,
+            $crate::field::Values::I32($v) => $body,
+            $crate::field::Values::F32($v) => $body,
+            $crate::field::Values::F64($v) => $body,
+        }
+    };
+}
+
+/// A scalar type the field can hold.
+pub trait Scalar: Copy + PartialOrd + Send + Sync + 'static {
+    /// The value as f64 (exact for every type but u64-range integers).
+    fn to_f64(self) -> f64;
+}
+
+macro_rules! impl_scalar {
+    ($($t:ty),*) => {$(
+        impl Scalar for $t {
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+        }
+    )*};
+}
+impl_scalar!(u8, i8, u16, i16, u32, i32, f32, f64);
+
+impl Values {
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        with_values!(self, v => v.len())
+    }
+
+    /// True when there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The value at `i` as f64.
+    #[inline]
+    pub fn get(&self, i: usize) -> f64 {
+        with_values!(self, v => v[i].to_f64())
+    }
+
+    /// The name of the stored type, as NRRD spells it.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Values::U8(_) => "uint8",
+            Values::I8(_) => "int8",
+            Values::U16(_) => "uint16",
+            Values::I16(_) => "int16",
+            Values::U32(_) => "uint32",
+            Values::I32(_) => "int32",
+            Values::F32(_) => "float32",
+            Values::F64(_) => "float64",
+        }
+    }
+
+    /// Bytes per stored value.
+    pub fn bytes_per_value(&self) -> usize {
+        match self {
+            Values::U8(_) | Values::I8(_) => 1,
+            Values::U16(_) | Values::I16(_) => 2,
+            Values::U32(_) | Values::I32(_) | Values::F32(_) => 4,
+            Values::F64(_) => 8,
+        }
+    }
+
+    /// Count of NaN or infinite values and the index of the first one.
+    pub fn non_finite(&self) -> Option<(usize, usize)> {
+        fn scan<T: Scalar>(v: &[T]) -> Option<(usize, usize)> {
+            let mut first = None;
+            let mut count = 0;
+            for (i, x) in v.iter().enumerate() {
+                if !x.to_f64().is_finite() {
+                    count += 1;
+                    first.get_or_insert(i);
+                }
+            }
+            first.map(|f| (count, f))
+        }
+        match self {
+            Values::F32(v) => scan(v),
+            Values::F64(v) => scan(v),
+            _ => None,
+        }
+    }
+
+    /// Smallest and largest value (0, 0 when empty).
+    pub fn range(&self) -> (f64, f64) {
+        fn mm<T: Scalar>(v: &[T]) -> (f64, f64) {
+            let mut it = v.iter();
+            let Some(&first) = it.next() else {
+                return (0.0, 0.0);
+            };
+            let (mut lo, mut hi) = (first, first);
+            for &x in it {
+                if x < lo {
+                    lo = x;
+                }
+                if x > hi {
+                    hi = x;
+                }
+            }
+            (lo.to_f64(), hi.to_f64())
+        }
+        with_values!(self, v => mm(v))
+    }
+}
+
+/// Why a field could not be made from the values given.
+#[derive(Debug, Error, PartialEq)]
+pub enum FieldError {
+    /// A dimension is zero.
+    #[error("dimensions {0:?} contain a zero")]
+    ZeroDimension([usize; 3]),
+    /// The product of the dimensions overflows or exceeds the engine's limit.
+    #[error("dimensions {0:?} give more than {MAX_VERTICES} vertices, the engine's limit")]
+    TooLarge([usize; 3]),
+    /// The number of values does not match the dimensions.
+    #[error("dimensions {dims:?} need {expected} values but {found} were given")]
+    CountMismatch {
+        /// Dimensions given.
+        dims: [usize; 3],
+        /// Their product.
+        expected: usize,
+        /// Values found.
+        found: usize,
+    },
+    /// Some values are NaN or infinite.
+    #[error("{count} values are NaN or infinite (first at vertex {first}, x={x} y={y} z={z})")]
+    NonFinite {
+        /// How many.
+        count: usize,
+        /// Linear index of the first.
+        first: usize,
+        /// Its x.
+        x: usize,
+        /// Its y.
+        y: usize,
+        /// Its z.
+        z: usize,
+    },
+    /// A spacing is not a positive finite number.
+    #[error("spacing {0:?} must be positive and finite")]
+    BadSpacing([f64; 3]),
+}
+
+/// The number of vertices of a grid of `dims`, checked against overflow and
+/// the engine's limit.
+pub fn checked_vertex_count(dims: [usize; 3]) -> Result<usize, FieldError> {
+    if dims.contains(&0) {
+        return Err(FieldError::ZeroDimension(dims));
+    }
+    dims[0]
+        .checked_mul(dims[1])
+        .and_then(|n| n.checked_mul(dims[2]))
+        .filter(|&n| n <= MAX_VERTICES)
+        .ok_or(FieldError::TooLarge(dims))
+}
+
+/// A scalar field sampled on a regular grid (Z = 1 for a 2D image).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarField {
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    values: Values,
+}
+
+impl ScalarField {
+    /// A field with unit spacing. Fails on zero or too large dimensions, a
+    /// count that does not match, and NaN or infinite values.
+    pub fn new(dims: [usize; 3], values: Values) -> Result<Self, FieldError> {
+        Self::with_spacing(dims, [1.0; 3], values)
+    }
+
+    /// A field with the given voxel spacing.
+    pub fn with_spacing(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        values: Values,
+    ) -> Result<Self, FieldError> {
+        let expected = checked_vertex_count(dims)?;
+        if values.len() != expected {
+            return Err(FieldError::CountMismatch {
+                dims,
+                expected,
+                found: values.len(),
+            });
+        }
+        if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(FieldError::BadSpacing(spacing));
+        }
+        if let Some((count, first)) = values.non_finite() {
+            return Err(FieldError::NonFinite {
+                count,
+                first,
+                x: first % dims[0],
+                y: first / dims[0] % dims[1],
+                z: first / (dims[0] * dims[1]),
+            });
+        }
+        Ok(Self {
+            dims,
+            spacing,
+            values,
+        })
+    }
+
+    /// Grid dimensions (X, Y, Z).
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Voxel spacing along X, Y, Z.
+    pub fn spacing(&self) -> [f64; 3] {
+        self.spacing
+    }
+
+    /// The stored values.
+    pub fn values(&self) -> &Values {
+        &self.values
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Never true for a valid field; here for clippy's sake.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// The value of vertex `v` as f64, in the file's units.
+    #[inline]
+    pub fn value(&self, v: u32) -> f64 {
+        self.values.get(v as usize)
+    }
+
+    /// True when `a` comes after `b` in the vertex order: higher value, or
+    /// equal value and higher id (simulation of simplicity).
+    #[inline]
+    pub fn is_above(&self, a: u32, b: u32) -> bool {
+        fn above<T: Scalar>(v: &[T], a: u32, b: u32) -> bool {
+            let (fa, fb) = (v[a as usize], v[b as usize]);
+            fa > fb || (fa == fb && a > b)
+        }
+        with_values!(&self.values, v => above(v, a, b))
+    }
+
+    /// The vertices sorted ascending by (value, id).
+    pub fn vertex_order(&self) -> Vec<u32> {
+        vertex_order(&self.values)
+    }
+
+    /// (x, y, z) of vertex `v`.
+    #[inline]
+    pub fn coords(&self, v: u32) -> [usize; 3] {
+        let v = v as usize;
+        let [x, y, _] = self.dims;
+        [v % x, v / x % y, v / (x * y)]
+    }
+
+    /// Smallest and largest value.
+    pub fn range(&self) -> (f64, f64) {
+        self.values.range()
+    }
+
+    /// The Freudenthal triangulation of this grid.
+    pub fn mesh(&self) -> crate::mesh::FreudenthalGrid {
+        crate::mesh::FreudenthalGrid::new(self.dims)
+    }
+}

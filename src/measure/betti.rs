@@ -1,0 +1,1 @@
+//! Betti numbers of contours per superarc (in progress).

@@ -1,0 +1,1 @@
+//! Local geometric measures (in progress).

@@ -1,0 +1,255 @@
+//! The simplicial mesh the contour tree is computed on.
+//!
+//! The engine only ever asks "which vertices share an edge with v"
+//! ([`Mesh::for_each_neighbour`]); the grid implements it implicitly through
+//! the Freudenthal (Kuhn) triangulation, which cuts every cube into six
+//! tetrahedra around its main diagonal (0,0,0)-(1,1,1). Its edges are the
+//! seven offsets ±(1,0,0), ±(0,1,0), ±(0,0,1), ±(1,1,0), ±(1,0,1), ±(0,1,1),
+//! ±(1,1,1): 14 neighbours for an interior vertex in 3D, 6 in 2D (Z = 1),
+//! 2 in 1D. Boundary vertices simply have fewer; nothing else is special.
+//!
+//! No edge list is stored: the mesh costs nothing per vertex.
+
+use strength_reduce::StrengthReducedU32;
+
+/// A simplicial mesh as the contour tree engine sees it: vertices `0..n` and
+/// the edges between them.
+pub trait Mesh: Sync {
+    /// Number of vertices.
+    fn num_vertices(&self) -> usize;
+
+    /// Calls `f` once for every vertex that shares an edge with `v`.
+    fn for_each_neighbour(&self, v: u32, f: impl FnMut(u32));
+}
+
+/// The 7 positive Freudenthal edge offsets (dx, dy, dz); their negatives are
+/// the other 7.
+pub const EDGE_OFFSETS: [[i64; 3]; 7] = [
+    [1, 0, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [1, 1, 0],
+    [1, 0, 1],
+    [0, 1, 1],
+    [1, 1, 1],
+];
+
+/// The six tetrahedra of a unit cube, as corner bit masks (bit 0 = +x,
+/// bit 1 = +y, bit 2 = +z). Each is the monotone path 0 -> e_i -> e_i+e_j
+/// -> 7 for one permutation (i, j, k), so every tetrahedron contains the
+/// main diagonal and all its edges are Freudenthal edges.
+pub const CUBE_TETRAHEDRA: [[u8; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+/// The Freudenthal triangulation of a regular grid, implicit.
+#[derive(Clone, Debug)]
+pub struct FreudenthalGrid {
+    dims: [usize; 3],
+    /// Linear-id offsets of the 14 neighbours of an interior vertex.
+    interior_offsets: Vec<i64>,
+    /// Offsets (dx, dy, dz) of all neighbours that exist in this grid's
+    /// dimension (14, 6 or 2).
+    directions: Vec<[i64; 3]>,
+    div_x: StrengthReducedU32,
+    div_y: StrengthReducedU32,
+}
+
+impl FreudenthalGrid {
+    /// The triangulation of a grid of `dims` vertices. Axes of size 1 are
+    /// dropped, so a (X, Y, 1) grid is the 2D triangulation.
+    pub fn new(dims: [usize; 3]) -> Self {
+        let mut directions = Vec::new();
+        for o in EDGE_OFFSETS {
+            // An offset along an axis of size 1 leaves the grid everywhere.
+            if (0..3).all(|a| o[a] == 0 || dims[a] > 1) {
+                directions.push(o);
+                directions.push([-o[0], -o[1], -o[2]]);
+            }
+        }
+        let (sx, sy) = (1i64, dims[0] as i64);
+        let sz = sy * dims[1] as i64;
+        let interior_offsets = directions
+            .iter()
+            .map(|d| d[0] * sx + d[1] * sy + d[2] * sz)
+            .collect();
+        Self {
+            dims,
+            interior_offsets,
+            directions,
+            div_x: StrengthReducedU32::new(dims[0].max(1) as u32),
+            div_y: StrengthReducedU32::new(dims[1].max(1) as u32),
+        }
+    }
+
+    /// Grid dimensions.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// (x, y, z) of vertex `v`, without hardware division.
+    #[inline]
+    pub fn coords(&self, v: u32) -> [u32; 3] {
+        let (yz, x) = StrengthReducedU32::div_rem(v, self.div_x);
+        let (z, y) = StrengthReducedU32::div_rem(yz, self.div_y);
+        [x, y, z]
+    }
+
+    /// The vertex id at (x, y, z).
+    #[inline]
+    pub fn vertex(&self, x: usize, y: usize, z: usize) -> u32 {
+        (x + self.dims[0] * (y + self.dims[1] * z)) as u32
+    }
+
+    /// The neighbour offsets (dx, dy, dz) of this grid.
+    pub fn directions(&self) -> &[[i64; 3]] {
+        &self.directions
+    }
+}
+
+impl Mesh for FreudenthalGrid {
+    fn num_vertices(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    #[inline(always)]
+    fn for_each_neighbour(&self, v: u32, mut f: impl FnMut(u32)) {
+        let [x, y, z] = self.coords(v);
+        let [dx, dy, dz] = self.dims.map(|d| d as u32);
+        // Interior test per axis; an axis of size 1 never constrains since
+        // its offsets were dropped.
+        let inside = |c: u32, d: u32| d == 1 || (c > 0 && c + 1 < d);
+        if inside(x, dx) && inside(y, dy) && inside(z, dz) {
+            for &o in &self.interior_offsets {
+                f((v as i64 + o) as u32);
+            }
+            return;
+        }
+        let c = [x as i64, y as i64, z as i64];
+        for (d, &o) in self.directions.iter().zip(&self.interior_offsets) {
+            let ok = (0..3).all(|a| {
+                let n = c[a] + d[a];
+                n >= 0 && n < self.dims[a] as i64
+            });
+            if ok {
+                f((v as i64 + o) as u32);
+            }
+        }
+    }
+}
+
+/// An explicit simplicial mesh given by its edge list, for tests and for
+/// meshes that are not grids.
+#[derive(Clone, Debug)]
+pub struct EdgeListMesh {
+    offsets: Vec<usize>,
+    neighbours: Vec<u32>,
+}
+
+impl EdgeListMesh {
+    /// A mesh of `n` vertices with the given undirected edges.
+    pub fn new(n: usize, edges: &[(u32, u32)]) -> Self {
+        let mut deg = vec![0usize; n + 1];
+        for &(a, b) in edges {
+            deg[a as usize + 1] += 1;
+            deg[b as usize + 1] += 1;
+        }
+        for i in 1..=n {
+            deg[i] += deg[i - 1];
+        }
+        let mut fill = deg.clone();
+        let mut neighbours = vec![0u32; deg[n]];
+        for &(a, b) in edges {
+            neighbours[fill[a as usize]] = b;
+            fill[a as usize] += 1;
+            neighbours[fill[b as usize]] = a;
+            fill[b as usize] += 1;
+        }
+        Self {
+            offsets: deg,
+            neighbours,
+        }
+    }
+}
+
+impl Mesh for EdgeListMesh {
+    fn num_vertices(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    fn for_each_neighbour(&self, v: u32, mut f: impl FnMut(u32)) {
+        let v = v as usize;
+        for &u in &self.neighbours[self.offsets[v]..self.offsets[v + 1]] {
+            f(u);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn neighbours(g: &FreudenthalGrid, v: u32) -> Vec<u32> {
+        let mut out = Vec::new();
+        g.for_each_neighbour(v, |u| out.push(u));
+        out.sort_unstable();
+        out
+    }
+
+    #[test]
+    fn interior_vertex_has_14_neighbours_in_3d_6_in_2d_2_in_1d() {
+        let g = FreudenthalGrid::new([4, 5, 6]);
+        assert_eq!(neighbours(&g, g.vertex(1, 2, 3)).len(), 14);
+        let g = FreudenthalGrid::new([4, 5, 1]);
+        assert_eq!(neighbours(&g, g.vertex(1, 2, 0)).len(), 6);
+        let g = FreudenthalGrid::new([7, 1, 1]);
+        assert_eq!(neighbours(&g, 3), vec![2, 4]);
+    }
+
+    #[test]
+    fn neighbourhood_is_symmetric_and_matches_offsets_everywhere() {
+        for dims in [[3, 4, 5], [1, 3, 4], [3, 1, 4], [2, 2, 2], [5, 1, 1], [1, 1, 1]] {
+            let g = FreudenthalGrid::new(dims);
+            let n = g.num_vertices() as u32;
+            for v in 0..n {
+                let nv = neighbours(&g, v);
+                // Brute force: every vertex whose coordinate difference is a
+                // Freudenthal offset or its negative.
+                let c = g.coords(v).map(|c| c as i64);
+                let mut expect: Vec<u32> = (0..n)
+                    .filter(|&u| {
+                        let d = g.coords(u).map(|c| c as i64);
+                        let diff = [d[0] - c[0], d[1] - c[1], d[2] - c[2]];
+                        EDGE_OFFSETS
+                            .iter()
+                            .any(|o| *o == diff || [-o[0], -o[1], -o[2]] == diff)
+                    })
+                    .collect();
+                expect.sort_unstable();
+                assert_eq!(nv, expect, "dims {dims:?} v {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn cube_tetrahedra_edges_are_mesh_edges() {
+        for t in CUBE_TETRAHEDRA {
+            for i in 0..4 {
+                for j in i + 1..4 {
+                    let (a, b) = (t[i], t[j]);
+                    let d = [
+                        ((b & 1) as i64) - ((a & 1) as i64),
+                        ((b >> 1 & 1) as i64) - ((a >> 1 & 1) as i64),
+                        ((b >> 2 & 1) as i64) - ((a >> 2 & 1) as i64),
+                    ];
+                    assert!(EDGE_OFFSETS.contains(&d), "{t:?} {a}->{b}");
+                }
+            }
+        }
+    }
+}
