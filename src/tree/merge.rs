@@ -96,12 +96,14 @@ pub fn merge(
         let y = if jt_up[xi] == 0 {
             // Upper leaf: its arc runs down the join tree. It leaves the
             // join tree as a leaf and is contracted out of the split tree.
-            let y = live_parent(&mut jt_parent, &ct_next, jt_parent[xi]);
+            let start = jt_parent[xi];
+            let y = live_parent(&mut jt_parent, &ct_next, start);
             ct_next[xi] = y | ABOVE;
             jt_up[y as usize] -= 1;
             y
         } else {
-            let y = live_parent(&mut st_parent, &ct_next, st_parent[xi]);
+            let start = st_parent[xi];
+            let y = live_parent(&mut st_parent, &ct_next, start);
             ct_next[xi] = y;
             st_down[y as usize] -= 1;
             y
