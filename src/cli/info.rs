@@ -1,10 +1,160 @@
-//! `flexiso info` (in progress).
+//! `flexiso info`: what a volume file holds (format, grid, type, spacing,
+//! value range, a histogram, the number of distinct values for integer
+//! data) and the memory its contour tree will need.
+
+use super::input::InputArgs;
+use crate::field::io::{TREE_BYTES_PER_VERTEX, Volume};
+use crate::field::{Scalar, Values};
+use std::fmt::Write as _;
 
 /// Arguments of `flexiso info`.
 #[derive(clap::Args, Debug, Default)]
-pub struct Args {}
+pub struct Args {
+    /// The volume.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Number of histogram bins.
+    #[arg(long, default_value_t = 10)]
+    pub bins: usize,
+}
 
 /// Runs `flexiso info`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("flexiso info is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let volume = args.input.load()?;
+    print!("{}", report(&volume, args.bins.clamp(1, 1000)));
+    Ok(())
+}
+
+fn bytes(k: usize) -> String {
+    if k == 1 {
+        "1 byte".into()
+    } else {
+        format!("{k} bytes")
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    let m = bytes as f64 / (1u64 << 20) as f64;
+    if m >= 10.0 {
+        format!("{m:.0} MiB")
+    } else {
+        format!("{m:.1} MiB")
+    }
+}
+
+/// The text `flexiso info` prints for `volume`, with a histogram of `bins`
+/// bins.
+pub fn report(volume: &Volume, bins: usize) -> String {
+    let f = &volume.field;
+    let v = f.values();
+    let [x, y, z] = f.dims();
+    let [sx, sy, sz] = f.spacing();
+    let (lo, hi) = f.range();
+    let n = f.len();
+    let mut out = String::new();
+    let _ = writeln!(out, "file:      {}", volume.path.display());
+    let _ = writeln!(out, "format:    {}", volume.format);
+    let _ = writeln!(out, "dims:      {x} x {y} x {z} = {n} vertices");
+    let stored = v.type_name();
+    let file_type = volume.scalar_type.name();
+    if stored == file_type {
+        let _ = writeln!(
+            out,
+            "type:      {stored} ({} bytes per value)",
+            v.bytes_per_value()
+        );
+    } else {
+        let _ = writeln!(
+            out,
+            "type:      {stored} ({} per value; {file_type} in the file)",
+            bytes(v.bytes_per_value())
+        );
+    }
+    let _ = writeln!(out, "spacing:   {sx} x {sy} x {sz}");
+    let _ = writeln!(out, "range:     {lo} .. {hi}");
+    if let Some(d) = distinct(v) {
+        let _ = writeln!(out, "distinct:  {d} values");
+    }
+    let counts = histogram(v, lo, hi, bins);
+    let _ = writeln!(out, "histogram: {bins} bins");
+    let peak = counts.iter().copied().max().unwrap_or(1).max(1);
+    let width = (hi - lo) / bins as f64;
+    for (i, c) in counts.iter().enumerate() {
+        let a = lo + width * i as f64;
+        let b = if i + 1 == bins { hi } else { a + width };
+        let bar = "#".repeat(((*c as f64 / peak as f64) * 40.0).ceil() as usize);
+        let close = if i + 1 == bins { ']' } else { ')' };
+        let _ = writeln!(
+            out,
+            "  [{:>10}, {:>10}{close} {c:>12} {bar}",
+            num(a),
+            num(b)
+        );
+    }
+    let values = (n * v.bytes_per_value()) as u64;
+    let tree = n as u64 * TREE_BYTES_PER_VERTEX;
+    let _ = writeln!(
+        out,
+        "memory:    values {} + contour tree {} ({TREE_BYTES_PER_VERTEX} bytes per vertex while building) = about {}",
+        mib(values),
+        mib(tree),
+        mib(values + tree)
+    );
+    for w in &volume.warnings {
+        let _ = writeln!(out, "warning:   {w}");
+    }
+    out
+}
+
+/// A bin edge: integral values without decimals, others with four.
+fn num(x: f64) -> String {
+    if x.fract() == 0.0 {
+        format!("{x}")
+    } else {
+        format!("{x:.4}")
+    }
+}
+
+/// Counts per bin of equal width over [lo, hi] (one bin when constant).
+pub fn histogram(values: &Values, lo: f64, hi: f64, bins: usize) -> Vec<u64> {
+    fn go<T: Scalar>(v: &[T], lo: f64, hi: f64, bins: usize) -> Vec<u64> {
+        let mut counts = vec![0u64; bins];
+        let scale = if hi > lo {
+            bins as f64 / (hi - lo)
+        } else {
+            0.0
+        };
+        for x in v {
+            let b = ((x.to_f64() - lo) * scale) as usize;
+            counts[b.min(bins - 1)] += 1;
+        }
+        counts
+    }
+    crate::with_values!(values, v => go(v, lo, hi, bins.max(1)))
+}
+
+/// Number of distinct values of integer data (`None` for floats).
+pub fn distinct(values: &Values) -> Option<usize> {
+    fn table<T: Copy>(v: &[T], size: usize, index: impl Fn(T) -> usize) -> usize {
+        let mut seen = vec![false; size];
+        for &x in v {
+            seen[index(x)] = true;
+        }
+        seen.iter().filter(|s| **s).count()
+    }
+    fn sorted<T: Copy + Ord>(v: &[T]) -> usize {
+        let mut s = v.to_vec();
+        s.sort_unstable();
+        s.dedup();
+        s.len()
+    }
+    Some(match values {
+        Values::U8(v) => table(v, 256, |x| x as usize),
+        Values::I8(v) => table(v, 256, |x| (x as i16 + 128) as usize),
+        Values::U16(v) => table(v, 1 << 16, |x| x as usize),
+        Values::I16(v) => table(v, 1 << 16, |x| (x as i32 + 32768) as usize),
+        Values::U32(v) => sorted(v),
+        Values::I32(v) => sorted(v),
+        Values::F32(_) | Values::F64(_) => return None,
+    })
 }

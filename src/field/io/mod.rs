@@ -1,9 +1,67 @@
 //! Readers for volume files, behind one interface: [`read_volume`].
-//! (Stub: the real readers are being written.)
+//!
+//! Formats, one module each, all hand-written small header parsers over a
+//! shared data path ([`data`]):
+//!
+//! | format | module | files |
+//! |---|---|---|
+//! | NRRD | [`nrrd`] | `.nrrd` (attached), `.nhdr` + data file; raw, gzip, bzip2, ascii |
+//! | MetaImage | [`metaimage`] | `.mha` (attached), `.mhd` + `.raw`/`.zraw` |
+//! | VTK legacy | [`vtk`] | `.vtk` STRUCTURED_POINTS, binary (big-endian) or ASCII |
+//! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw; zlib |
+//! | NIfTI-1 | [`nifti`] | `.nii`, `.nii.gz`, `.hdr` + `.img` |
+//! | raw | [`raw`] | `NAME_XxYxZ_TYPE.raw`, or any file with [`ReadOptions::raw`] |
+//! | image stack | [`stack`] | a folder of 8/16-bit gray PNG or TIFF slices |
+//!
+//! What every reader guarantees:
+//!
+//! * **Errors, never panics**, each a one-line message naming the file and the
+//!   problem ([`ReadError`]).
+//! * **No allocation beyond the header's promise, and only after checks**:
+//!   the dimensions are checked against overflow and [`MAX_VERTICES`], the
+//!   memory the engine will need ([`memory_needed`]) against the memory
+//!   available, and for uncompressed data the file size against the promise,
+//!   before the values are allocated. Compressed data is decompressed into a
+//!   buffer that grows as data arrives, capped at the promised byte count
+//!   (one byte more is read only to detect extra data).
+//! * **One copy**: values are read straight into their typed `Vec` (a
+//!   `uint8` file stays one byte per voxel); there is no intermediate byte
+//!   buffer for uncompressed data.
+//! * **Exact sizes**: data shorter than promised is an error ("truncated");
+//!   data longer than promised is an error for raw, NRRD and MetaImage files
+//!   (a header that does not describe its file is more likely wrong than
+//!   padded), and a warning for NIfTI (some writers pad).
+//! * **64-bit integers** (`int64`, `uint64`) are converted to `float64`,
+//!   since the engine keeps no 64-bit integer type; values beyond 2^53 lose
+//!   precision. [`Volume::scalar_type`] keeps the file's type.
+//! * **NaN and infinity** are refused with their count and first position,
+//!   or replaced by the smallest or largest finite value ([`NanPolicy`]).
 
-use super::{FieldError, ScalarField};
+pub mod data;
+pub mod metaimage;
+pub mod nifti;
+pub mod nrrd;
+pub mod raw;
+pub mod stack;
+pub mod vti;
+pub mod vtk;
+
+use super::{FieldError, MAX_VERTICES, ScalarField, Values, checked_vertex_count};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
+
+pub(crate) use self::check_volume_size as check_dims;
+
+/// Peak bytes per vertex the engine needs while building the contour tree,
+/// on top of the values themselves (vertex order, union-find, join and split
+/// trees, the augmented tree). The tree module owns the real figure; this is
+/// the number the readers and `flexiso info` quote.
+pub const TREE_BYTES_PER_VERTEX: u64 = 26;
+
+/// Bytes per vertex the readers reserve for the engine when checking that a
+/// volume fits in memory: [`TREE_BYTES_PER_VERTEX`] plus headroom.
+pub const CHECK_BYTES_PER_VERTEX: u64 = 30;
 
 /// What to do with NaN or infinite values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -22,7 +80,8 @@ pub enum NanPolicy {
 pub struct RawLayout {
     /// Grid dimensions.
     pub dims: [usize; 3],
-    /// Scalar type as NRRD names it: uint8, int16, float32, ...
+    /// Scalar type as NRRD names it: uint8, int16, float32, ... (any name
+    /// [`ScalarType::parse`] accepts).
     pub scalar_type: String,
     /// True for big-endian data.
     pub big_endian: bool,
@@ -31,10 +90,15 @@ pub struct RawLayout {
 /// Options for [`read_volume`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ReadOptions {
-    /// Layout for raw files whose name does not carry it.
+    /// Layout for raw files whose name does not carry it. When set, the file
+    /// is read as raw whatever its name.
     pub raw: Option<RawLayout>,
     /// NaN and infinity policy.
     pub nan: NanPolicy,
+    /// Memory (bytes) the volume and its tree may use; `None` means the
+    /// `MemAvailable` figure of `/proc/meminfo` (no check where that is
+    /// unknown).
+    pub max_memory: Option<u64>,
 }
 
 /// A volume as read from a file.
@@ -46,6 +110,12 @@ pub struct Volume {
     pub path: PathBuf,
     /// Format name, e.g. "NRRD (gzip)".
     pub format: String,
+    /// The scalar type in the file, which may differ from the stored one
+    /// (int64 is stored as float64, NIfTI with a slope as float).
+    pub scalar_type: ScalarType,
+    /// Things the reader tolerated (replaced NaNs, padding after the data,
+    /// unusable spacing), for the user to see. Sorted by discovery.
+    pub warnings: Vec<String>,
 }
 
 /// Why a volume could not be read.
@@ -59,6 +129,32 @@ pub enum ReadError {
         /// What is wrong.
         message: String,
     },
+    /// The file could not be opened or read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// The volume would not fit in memory with its contour tree.
+    #[error(
+        "{path}: {dims:?} {type_name} needs about {} MiB (values and contour tree) but only {} MiB are available",
+        needed >> 20,
+        available >> 20
+    )]
+    OutOfMemory {
+        /// The file.
+        path: PathBuf,
+        /// Its dimensions.
+        dims: [usize; 3],
+        /// Its scalar type.
+        type_name: &'static str,
+        /// Bytes needed ([`memory_needed`]).
+        needed: u64,
+        /// Bytes available.
+        available: u64,
+    },
     /// The values do not make a valid field.
     #[error("{path}: {source}")]
     Field {
@@ -69,10 +165,471 @@ pub enum ReadError {
     },
 }
 
-/// Reads a volume file, choosing the reader by extension and content.
-pub fn read_volume(path: &Path, _opts: &ReadOptions) -> Result<Volume, ReadError> {
-    Err(ReadError::Invalid {
+impl ReadError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            ReadError::Invalid { path, .. }
+            | ReadError::Io { path, .. }
+            | ReadError::OutOfMemory { path, .. }
+            | ReadError::Field { path, .. } => path,
+        }
+    }
+}
+
+/// An [`ReadError::Invalid`] for `path`.
+pub(crate) fn invalid(path: &Path, message: impl Into<String>) -> ReadError {
+    ReadError::Invalid {
         path: path.to_owned(),
-        message: "no reader yet".into(),
+        message: message.into(),
+    }
+}
+
+/// An [`ReadError::Io`] for `path`.
+pub(crate) fn io_error(path: &Path, source: std::io::Error) -> ReadError {
+    ReadError::Io {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+/// A scalar type a file can hold. Wider than [`Values`]: 64-bit integers are
+/// read and converted to f64.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScalarType {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// Unsigned 64-bit (stored as f64).
+    U64,
+    /// Signed 64-bit (stored as f64).
+    I64,
+    /// 32-bit float.
+    F32,
+    /// 64-bit float.
+    F64,
+}
+
+impl ScalarType {
+    /// Bytes per value in the file.
+    pub fn size(self) -> usize {
+        match self {
+            ScalarType::U8 | ScalarType::I8 => 1,
+            ScalarType::U16 | ScalarType::I16 => 2,
+            ScalarType::U32 | ScalarType::I32 | ScalarType::F32 => 4,
+            ScalarType::U64 | ScalarType::I64 | ScalarType::F64 => 8,
+        }
+    }
+
+    /// The name NRRD gives it (uint8, int16, float32, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            ScalarType::U8 => "uint8",
+            ScalarType::I8 => "int8",
+            ScalarType::U16 => "uint16",
+            ScalarType::I16 => "int16",
+            ScalarType::U32 => "uint32",
+            ScalarType::I32 => "int32",
+            ScalarType::U64 => "uint64",
+            ScalarType::I64 => "int64",
+            ScalarType::F32 => "float32",
+            ScalarType::F64 => "float64",
+        }
+    }
+
+    /// Reads a type name: the canonical names above, every NRRD alias
+    /// ("unsigned char", "short", "ushort", "long long", "float", "double",
+    /// "uint8_t", ...), and "float32"/"float64". Case-insensitive.
+    pub fn parse(name: &str) -> Option<Self> {
+        let n = name.trim().to_ascii_lowercase();
+        let n = n.split_whitespace().collect::<Vec<_>>().join(" ");
+        Some(match n.as_str() {
+            "uint8" | "uint8_t" | "uchar" | "unsigned char" | "u8" => ScalarType::U8,
+            "int8" | "int8_t" | "signed char" | "i8" => ScalarType::I8,
+            "uint16" | "uint16_t" | "ushort" | "unsigned short" | "unsigned short int" | "u16" => {
+                ScalarType::U16
+            }
+            "int16" | "int16_t" | "short" | "short int" | "signed short" | "signed short int"
+            | "i16" => ScalarType::I16,
+            "uint32" | "uint32_t" | "uint" | "unsigned int" | "u32" => ScalarType::U32,
+            "int32" | "int32_t" | "int" | "signed int" | "i32" => ScalarType::I32,
+            "uint64"
+            | "uint64_t"
+            | "ulonglong"
+            | "unsigned long long"
+            | "unsigned long long int"
+            | "u64" => ScalarType::U64,
+            "int64"
+            | "int64_t"
+            | "longlong"
+            | "long long"
+            | "long long int"
+            | "signed long long"
+            | "signed long long int"
+            | "i64" => ScalarType::I64,
+            "float" | "float32" | "f32" | "single" => ScalarType::F32,
+            "double" | "float64" | "f64" => ScalarType::F64,
+            _ => return None,
+        })
+    }
+
+    /// Bytes per value once in memory (64-bit integers become f64).
+    pub fn stored_size(self) -> usize {
+        self.size()
+    }
+
+    /// True for the float types.
+    pub fn is_float(self) -> bool {
+        matches!(self, ScalarType::F32 | ScalarType::F64)
+    }
+}
+
+/// Bytes the engine needs for a volume of `vertices` values of
+/// `bytes_per_value` each: the values plus [`CHECK_BYTES_PER_VERTEX`].
+pub fn memory_needed(vertices: usize, bytes_per_value: usize) -> u64 {
+    (vertices as u64).saturating_mul(bytes_per_value as u64 + CHECK_BYTES_PER_VERTEX)
+}
+
+/// `MemAvailable` of `/proc/meminfo` in bytes, if known.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib.saturating_mul(1024))
+}
+
+/// Checks `dims` (overflow, [`MAX_VERTICES`], and the memory the values
+/// and the contour tree will need against [`ReadOptions::max_memory`] or
+/// [`available_memory`]) before anything is allocated; returns the vertex
+/// count.
+pub fn check_volume_size(
+    path: &Path,
+    dims: [usize; 3],
+    ty: ScalarType,
+    opts: &ReadOptions,
+) -> Result<usize, ReadError> {
+    let n = checked_vertex_count(dims).map_err(|source| ReadError::Field {
+        path: path.to_owned(),
+        source,
+    })?;
+    debug_assert!(n <= MAX_VERTICES);
+    let needed = memory_needed(n, ty.stored_size());
+    if let Some(available) = opts.max_memory.or_else(available_memory)
+        && needed > available
+    {
+        return Err(ReadError::OutOfMemory {
+            path: path.to_owned(),
+            dims,
+            type_name: ty.name(),
+            needed,
+            available,
+        });
+    }
+    Ok(n)
+}
+
+/// Reads a volume file, choosing the reader by extension and content:
+/// a folder is an image stack; with [`ReadOptions::raw`] any file is raw;
+/// otherwise the extension decides, and for unknown extensions the first
+/// bytes do.
+pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
+    let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
+    if meta.is_dir() {
+        return stack::read(path, opts);
+    }
+    if let Some(layout) = &opts.raw {
+        return raw::read(path, layout, opts);
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let ext = |e: &str| name.ends_with(e);
+    if ext(".nrrd") || ext(".nhdr") {
+        return nrrd::read(path, opts);
+    }
+    if ext(".mha") || ext(".mhd") {
+        return metaimage::read(path, opts);
+    }
+    if ext(".vtk") {
+        return vtk::read(path, opts);
+    }
+    if ext(".vti") {
+        return vti::read(path, opts);
+    }
+    if ext(".nii") || ext(".nii.gz") || ext(".hdr") {
+        return nifti::read(path, opts);
+    }
+    if ext(".raw") {
+        return raw::read_by_name(path, opts);
+    }
+    if ext(".png") || ext(".tif") || ext(".tiff") {
+        return stack::read_single(path, opts);
+    }
+    // Unknown extension: sniff.
+    let mut head = [0u8; 512];
+    let got = std::fs::File::open(path)
+        .and_then(|mut f| data::read_full(&mut f, &mut head))
+        .map_err(|e| io_error(path, e))?;
+    let head = &head[..got];
+    if head.starts_with(b"NRRD000") {
+        return nrrd::read(path, opts);
+    }
+    if head.starts_with(b"# vtk DataFile") {
+        return vtk::read(path, opts);
+    }
+    if head.starts_with(b"<?xml") || head.starts_with(b"<VTKFile") {
+        return vti::read(path, opts);
+    }
+    if nifti::sniff(head) {
+        return nifti::read(path, opts);
+    }
+    let text = String::from_utf8_lossy(head);
+    if text.starts_with("ObjectType") || text.starts_with("NDims") {
+        return metaimage::read(path, opts);
+    }
+    Err(invalid(
+        path,
+        "unknown volume format (expected .nrrd, .nhdr, .mha, .mhd, .vtk, .vti, .nii, .nii.gz, \
+         NAME_XxYxZ_TYPE.raw, or a folder of PNG/TIFF slices; for other raw files give --dims and --type)",
+    ))
+}
+
+/// Turns decoded values into a [`Volume`]: applies the NaN policy, makes
+/// unusable spacings 1 (with a warning), and builds the field.
+#[allow(clippy::too_many_arguments)] // one call per reader, all named
+pub(crate) fn finish(
+    path: &Path,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    mut values: Values,
+    scalar_type: ScalarType,
+    format: String,
+    opts: &ReadOptions,
+    mut warnings: Vec<String>,
+) -> Result<Volume, ReadError> {
+    let mut sp = spacing;
+    for s in &mut sp {
+        *s = s.abs();
+        if !(s.is_finite() && *s > 0.0) {
+            *s = 1.0;
+        }
+    }
+    if sp != spacing.map(f64::abs) {
+        warnings.push(format!("spacing {spacing:?} is unusable; using {sp:?}"));
+    }
+    if let Some((count, first)) = values.non_finite() {
+        match opts.nan {
+            NanPolicy::Error => {} // ScalarField reports count and position.
+            NanPolicy::Min | NanPolicy::Max => {
+                let Some(fill) = finite_extreme(&values, opts.nan == NanPolicy::Max) else {
+                    return Err(invalid(path, "every value is NaN or infinite"));
+                };
+                replace_non_finite(&mut values, fill);
+                let [x, y] = [dims[0], dims[1]];
+                warnings.push(format!(
+                    "{count} NaN or infinite values (first at x={} y={} z={}) replaced by {fill}",
+                    first % x,
+                    first / x % y,
+                    first / (x * y)
+                ));
+            }
+        }
+    }
+    let field = ScalarField::with_spacing(dims, sp, values).map_err(|source| ReadError::Field {
+        path: path.to_owned(),
+        source,
+    })?;
+    Ok(Volume {
+        field,
+        path: path.to_owned(),
+        format,
+        scalar_type,
+        warnings,
     })
+}
+
+/// Smallest (or largest) finite value, if any.
+fn finite_extreme(values: &Values, max: bool) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    for i in 0..values.len() {
+        let v = values.get(i);
+        if v.is_finite() {
+            best = Some(match best {
+                None => v,
+                Some(b) if max => b.max(v),
+                Some(b) => b.min(v),
+            });
+        }
+    }
+    best
+}
+
+fn replace_non_finite(values: &mut Values, fill: f64) {
+    match values {
+        Values::F32(v) => v
+            .iter_mut()
+            .filter(|x| !x.is_finite())
+            .for_each(|x| *x = fill as f32),
+        Values::F64(v) => v
+            .iter_mut()
+            .filter(|x| !x.is_finite())
+            .for_each(|x| *x = fill),
+        _ => {}
+    }
+}
+
+/// Reads the text header at the start of `path`: at most `max` bytes, split
+/// into lines (`\n` or `\r\n`) until `is_end` says a line ends the header.
+/// Returns the lines (the end line included) and the byte offset just after
+/// the end line. When no end line is found the whole file must be header
+/// (detached headers), and it must fit in `max` bytes.
+pub(crate) fn read_header_lines(
+    path: &Path,
+    max: usize,
+    mut is_end: impl FnMut(&str) -> bool,
+) -> Result<(Vec<String>, usize), ReadError> {
+    let mut file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+    let mut buf = vec![0u8; max];
+    let got = data::read_full(&mut file, &mut buf).map_err(|e| io_error(path, e))?;
+    buf.truncate(got);
+    let mut lines = Vec::new();
+    let mut pos = 0;
+    while pos < buf.len() {
+        let Some(nl) = buf[pos..].iter().position(|&b| b == b'\n') else {
+            if got == max {
+                return Err(invalid(
+                    path,
+                    format!("header does not end within its first {max} bytes"),
+                ));
+            }
+            // Last line without newline: fine for a detached header.
+            let line = header_line(path, &buf[pos..], lines.len())?;
+            let end = is_end(&line);
+            lines.push(line);
+            return Ok((lines, if end { buf.len() } else { usize::MAX }));
+        };
+        let line = header_line(path, &buf[pos..pos + nl], lines.len())?;
+        pos += nl + 1;
+        let end = is_end(&line);
+        lines.push(line);
+        if end {
+            return Ok((lines, pos));
+        }
+    }
+    if got == max {
+        return Err(invalid(
+            path,
+            format!("header does not end within its first {max} bytes"),
+        ));
+    }
+    Ok((lines, usize::MAX))
+}
+
+fn header_line(path: &Path, bytes: &[u8], index: usize) -> Result<String, ReadError> {
+    let bytes = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(s) if !s.contains('\0') => Ok(s.to_owned()),
+        _ => Err(invalid(
+            path,
+            format!(
+                "header line {} is not text (binary garbage, or data where the header should end)",
+                index + 1
+            ),
+        )),
+    }
+}
+
+/// Parses `n` whitespace-separated numbers, as in `"64 64 64"`.
+pub(crate) fn parse_numbers<T: std::str::FromStr>(text: &str) -> Option<Vec<T>> {
+    text.split_whitespace().map(|t| t.parse().ok()).collect()
+}
+
+/// Natural-order comparison: digit runs compare by value, so `slice2`
+/// comes before `slice10`.
+pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    use std::cmp::Ordering;
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return Ordering::Equal,
+            (None, _) => return Ordering::Less,
+            (_, None) => return Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let da = a.iter().take_while(|c| c.is_ascii_digit()).count();
+                let db = b.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (na, nb) = (&a[..da], &b[..db]);
+                // Compare by value: strip leading zeros, then length, then digits.
+                let ta = trim_zeros(na);
+                let tb = trim_zeros(nb);
+                let ord = ta.len().cmp(&tb.len()).then(ta.cmp(tb)).then(da.cmp(&db));
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                a = &a[da..];
+                b = &b[db..];
+            }
+            (Some(x), Some(y)) => {
+                if x != y {
+                    return x.cmp(y);
+                }
+                a = &a[1..];
+                b = &b[1..];
+            }
+        }
+    }
+}
+
+fn trim_zeros(d: &[u8]) -> &[u8] {
+    let k = d.iter().take_while(|&&c| c == b'0').count();
+    &d[k..]
+}
+
+/// Reads up to `len` bytes of `r` (for header sniffing).
+pub(crate) fn read_prefix(r: &mut impl Read, len: usize) -> std::io::Result<Vec<u8>> {
+    let mut buf = vec![0u8; len];
+    let got = data::read_full(r, &mut buf)?;
+    buf.truncate(got);
+    Ok(buf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn natural_order_puts_slice2_before_slice10() {
+        let mut names = vec!["slice10.png", "slice2.png", "slice1.png", "slice02b.png"];
+        names.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            names,
+            ["slice1.png", "slice2.png", "slice02b.png", "slice10.png"]
+        );
+    }
+
+    #[test]
+    fn type_aliases_parse() {
+        for (name, ty) in [
+            ("unsigned char", ScalarType::U8),
+            ("short", ScalarType::I16),
+            ("ushort", ScalarType::U16),
+            ("float", ScalarType::F32),
+            ("double", ScalarType::F64),
+            ("int64", ScalarType::I64),
+            ("unsigned  long long int", ScalarType::U64),
+            ("signed char", ScalarType::I8),
+        ] {
+            assert_eq!(ScalarType::parse(name), Some(ty), "{name}");
+        }
+        assert_eq!(ScalarType::parse("block"), None);
+    }
 }

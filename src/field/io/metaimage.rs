@@ -1,0 +1,214 @@
+//! MetaImage (ITK): `.mha` with the data attached after the
+//! `ElementDataFile = LOCAL` line, or `.mhd` naming a data file (`.raw`,
+//! or zlib-compressed `.zraw`).
+//!
+//! Read: `NDims` (2 or 3), `DimSize`, `ElementType` (`MET_UCHAR` ...
+//! `MET_DOUBLE`; `MET_LONG` is 4 bytes as in MetaIO), `ElementSpacing` (or
+//! `ElementSize`), `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`,
+//! `CompressedData`, `BinaryData` (False: ASCII), `HeaderSize` (bytes to
+//! skip in the data file; -1: the data ends the file), and
+//! `ElementNumberOfChannels` (must be 1). Keys are matched without case.
+
+use super::data::{DataSpec, Encoding, Tail, read_data};
+use super::nrrd::clip;
+use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
+use std::path::Path;
+
+const MAX_HEADER: usize = 1 << 20;
+
+/// Reads a `.mha` or `.mhd` file.
+pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
+    let (lines, data_offset) = super::read_header_lines(path, MAX_HEADER, |line| {
+        line.split_once('=')
+            .is_some_and(|(k, _)| k.trim().eq_ignore_ascii_case("ElementDataFile"))
+    })?;
+    let mut fields: Vec<(String, String)> = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let Some((k, v)) = line.split_once('=') else {
+            return Err(invalid(
+                path,
+                format!(
+                    "header line {}: expected 'Key = Value', found '{}' (not a MetaImage file?)",
+                    i + 1,
+                    clip(line)
+                ),
+            ));
+        };
+        fields.push((k.trim().to_ascii_lowercase(), v.trim().to_owned()));
+    }
+    let get = |key: &str| {
+        fields
+            .iter()
+            .find(|(k, _)| k == &key.to_ascii_lowercase())
+            .map(|(_, v)| v.as_str())
+    };
+    let boolean = |key: &str| -> Result<Option<bool>, ReadError> {
+        match get(key).map(str::to_ascii_lowercase).as_deref() {
+            None => Ok(None),
+            Some("true") | Some("1") => Ok(Some(true)),
+            Some("false") | Some("0") => Ok(Some(false)),
+            Some(other) => Err(invalid(
+                path,
+                format!("'{key}' must be True or False, not '{}'", clip(other)),
+            )),
+        }
+    };
+    let file_name = get("ElementDataFile")
+        .ok_or_else(|| invalid(path, "missing 'ElementDataFile' (not a MetaImage file?)"))?;
+    let ndims: usize = get("NDims")
+        .ok_or_else(|| invalid(path, "missing 'NDims'"))?
+        .parse()
+        .map_err(|_| invalid(path, "'NDims' is not a number"))?;
+    if !(1..=3).contains(&ndims) {
+        return Err(invalid(
+            path,
+            format!("NDims {ndims} is not supported (1 to 3)"),
+        ));
+    }
+    let sizes: Vec<usize> = get("DimSize")
+        .ok_or_else(|| invalid(path, "missing 'DimSize'"))
+        .and_then(|v| {
+            super::parse_numbers(v)
+                .ok_or_else(|| invalid(path, format!("bad 'DimSize': '{}'", clip(v))))
+        })?;
+    if sizes.len() != ndims {
+        return Err(invalid(
+            path,
+            format!("'DimSize' has {} numbers but NDims is {ndims}", sizes.len()),
+        ));
+    }
+    let mut dims = [1usize; 3];
+    dims[..ndims].copy_from_slice(&sizes);
+    let channels = get("ElementNumberOfChannels").unwrap_or("1");
+    if channels != "1" {
+        return Err(invalid(
+            path,
+            format!(
+                "ElementNumberOfChannels {} is not supported (scalar data only)",
+                clip(channels)
+            ),
+        ));
+    }
+    let et = get("ElementType").ok_or_else(|| invalid(path, "missing 'ElementType'"))?;
+    let ty = match et.to_ascii_uppercase().as_str() {
+        "MET_UCHAR" => ScalarType::U8,
+        "MET_CHAR" => ScalarType::I8,
+        "MET_USHORT" => ScalarType::U16,
+        "MET_SHORT" => ScalarType::I16,
+        "MET_UINT" | "MET_ULONG" => ScalarType::U32,
+        "MET_INT" | "MET_LONG" => ScalarType::I32,
+        "MET_ULONG_LONG" => ScalarType::U64,
+        "MET_LONG_LONG" => ScalarType::I64,
+        "MET_FLOAT" => ScalarType::F32,
+        "MET_DOUBLE" => ScalarType::F64,
+        other => {
+            return Err(invalid(
+                path,
+                format!("unknown or unsupported ElementType '{}'", clip(other)),
+            ));
+        }
+    };
+    let mut spacing = [1.0f64; 3];
+    if let Some(v) = get("ElementSpacing").or_else(|| get("ElementSize")) {
+        let s: Vec<f64> = super::parse_numbers(v)
+            .ok_or_else(|| invalid(path, format!("bad 'ElementSpacing': '{}'", clip(v))))?;
+        if s.len() != ndims {
+            return Err(invalid(
+                path,
+                format!(
+                    "'ElementSpacing' has {} numbers but NDims is {ndims}",
+                    s.len()
+                ),
+            ));
+        }
+        spacing[..ndims].copy_from_slice(&s);
+    }
+    let big_endian = boolean("BinaryDataByteOrderMSB")?
+        .or(boolean("ElementByteOrderMSB")?)
+        .unwrap_or(false);
+    let compressed = boolean("CompressedData")?.unwrap_or(false);
+    let binary = boolean("BinaryData")?.unwrap_or(true);
+    let encoding = match (binary, compressed) {
+        (_, true) => Encoding::Zlib,
+        (true, false) => Encoding::Raw,
+        (false, false) => Encoding::Ascii,
+    };
+    let header_size: i64 = match get("HeaderSize") {
+        None => 0,
+        Some(v) => v
+            .parse()
+            .map_err(|_| invalid(path, format!("bad 'HeaderSize': '{}'", clip(v))))?,
+    };
+    let n = check_dims(path, dims, ty, opts)?;
+    let local = file_name.eq_ignore_ascii_case("LOCAL");
+    let data_file = if local {
+        if data_offset == usize::MAX {
+            return Err(invalid(
+                path,
+                "'ElementDataFile = LOCAL' must end the header",
+            ));
+        }
+        path.to_owned()
+    } else {
+        if file_name.eq_ignore_ascii_case("LIST")
+            || file_name.contains('%')
+            || file_name.split_whitespace().count() > 1
+        {
+            return Err(invalid(
+                path,
+                format!(
+                    "ElementDataFile '{}' is a file list, which is not supported",
+                    clip(file_name)
+                ),
+            ));
+        }
+        path.parent().unwrap_or(Path::new(".")).join(file_name)
+    };
+    let base = if local { data_offset as u64 } else { 0 };
+    let offset = match header_size {
+        -1 if encoding == Encoding::Raw => {
+            let len = std::fs::metadata(&data_file)
+                .map_err(|e| io_error(&data_file, e))?
+                .len();
+            let need = n as u64 * ty.size() as u64;
+            if len < base + need {
+                return Err(invalid(
+                    &data_file,
+                    format!(
+                        "data truncated: the header promises {need} bytes but the file has only {}",
+                        len.saturating_sub(base)
+                    ),
+                ));
+            }
+            len - need
+        }
+        h if h < 0 => {
+            return Err(invalid(
+                path,
+                format!("'HeaderSize = {h}' is not supported here"),
+            ));
+        }
+        h => base + h as u64,
+    };
+    let spec = DataSpec {
+        file: data_file,
+        offset,
+        skip_decoded: 0,
+        encoding,
+        ty,
+        big_endian,
+        count: n,
+        tail: Tail::Error,
+    };
+    let (values, warnings) = read_data(&spec)?;
+    let format = format!(
+        "MetaImage ({}, {})",
+        if local { ".mha" } else { ".mhd" },
+        encoding.name()
+    );
+    finish(path, dims, spacing, values, ty, format, opts, warnings)
+}

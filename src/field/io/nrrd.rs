@@ -1,0 +1,349 @@
+//! NRRD (teem's "nearly raw raster data"): `.nrrd` with the data attached
+//! after a blank line, or a `.nhdr` header naming a `data file`.
+//!
+//! Read: `type` (every NRRD alias), `dimension` 1 to 3 (missing axes have
+//! size 1), `sizes`, `encoding` raw / gzip / bzip2 / ascii (also `txt`,
+//! `text`, `gz`, `bz2`), `endian`, `spacings` or `space directions` (the
+//! spacing of an axis is the norm of its direction vector), `byte skip`
+//! (-1: the data ends the file; raw only), `line skip`, `data file`
+//! (relative to the header's folder). Other fields are ignored; `data file:
+//! LIST` and printf-style file lists are refused.
+//!
+//! As in teem, `line skip` counts lines of the data file before the data and
+//! `byte skip` counts bytes after them, in the decompressed stream for
+//! compressed encodings.
+
+use super::data::{DataSpec, Encoding, Tail, read_data};
+use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
+use std::io::{BufRead, BufReader, Seek, SeekFrom};
+use std::path::Path;
+
+const MAX_HEADER: usize = 1 << 20;
+
+/// Reads a `.nrrd` or `.nhdr` file.
+pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
+    let mut first = true;
+    let mut bad_magic = false;
+    let (lines, data_offset) = super::read_header_lines(path, MAX_HEADER, |line| {
+        if first {
+            first = false;
+            bad_magic = !is_magic(line);
+            return bad_magic;
+        }
+        line.is_empty()
+    })
+    .map_err(|e| {
+        // A file that is not NRRD at all is best described as such.
+        if let ReadError::Invalid { .. } = e {
+            match std::fs::File::open(path).and_then(|mut f| super::read_prefix(&mut f, 8)) {
+                Ok(head) if !head.starts_with(b"NRRD000") => {
+                    invalid(path, "not a NRRD file (does not start with NRRD000x)")
+                }
+                _ => e,
+            }
+        } else {
+            e
+        }
+    })?;
+    if bad_magic || lines.is_empty() {
+        return Err(invalid(
+            path,
+            "not a NRRD file (does not start with NRRD000x)",
+        ));
+    }
+    let mut h = Header::default();
+    for (i, line) in lines.iter().enumerate().skip(1) {
+        let line = line.trim_end();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        if let Some(k) = line.find(":=") {
+            if !line[..k].contains(": ") {
+                continue; // key/value pair
+            }
+        }
+        let Some((field, value)) = line.split_once(':') else {
+            return Err(invalid(
+                path,
+                format!(
+                    "header line {}: expected 'field: value', found '{}'",
+                    i + 1,
+                    clip(line)
+                ),
+            ));
+        };
+        h.set(path, &field.trim().to_ascii_lowercase(), value.trim())?;
+    }
+    let attached = data_offset != usize::MAX;
+    let dimension = h
+        .dimension
+        .ok_or_else(|| invalid(path, "missing 'dimension'"))?;
+    if !(1..=3).contains(&dimension) {
+        return Err(invalid(
+            path,
+            format!("dimension {dimension} is not supported (scalar volumes of dimension 1 to 3)"),
+        ));
+    }
+    let sizes = h.sizes.ok_or_else(|| invalid(path, "missing 'sizes'"))?;
+    if sizes.len() != dimension {
+        return Err(invalid(
+            path,
+            format!(
+                "'sizes' has {} numbers but dimension is {dimension}",
+                sizes.len()
+            ),
+        ));
+    }
+    let mut dims = [1usize; 3];
+    dims[..dimension].copy_from_slice(&sizes);
+    let ty_name = h.ty.ok_or_else(|| invalid(path, "missing 'type'"))?;
+    let ty = ScalarType::parse(&ty_name).ok_or_else(|| {
+        invalid(
+            path,
+            format!("unknown or unsupported type '{}'", clip(&ty_name)),
+        )
+    })?;
+    let enc_name = h
+        .encoding
+        .ok_or_else(|| invalid(path, "missing 'encoding'"))?;
+    let encoding = match enc_name.to_ascii_lowercase().as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "bzip2" | "bz2" => Encoding::Bzip2,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(invalid(
+                path,
+                format!(
+                    "unknown or unsupported encoding '{}' (raw, gzip, bzip2, ascii)",
+                    clip(other)
+                ),
+            ));
+        }
+    };
+    let big_endian = match h.endian.as_deref().map(str::to_ascii_lowercase).as_deref() {
+        Some("little") => false,
+        Some("big") => true,
+        Some(other) => {
+            return Err(invalid(
+                path,
+                format!("unknown endian '{}' (little or big)", clip(other)),
+            ));
+        }
+        None if ty.size() > 1 && encoding != Encoding::Ascii => {
+            return Err(invalid(
+                path,
+                format!("missing 'endian' for {} data", ty.name()),
+            ));
+        }
+        None => false,
+    };
+    let mut spacing = [1.0f64; 3];
+    if let Some(dirs) = &h.directions {
+        if dirs.len() != dimension {
+            return Err(invalid(
+                path,
+                format!(
+                    "'space directions' has {} entries but dimension is {dimension}",
+                    dirs.len()
+                ),
+            ));
+        }
+        for (s, d) in spacing.iter_mut().zip(dirs) {
+            if let Some(norm) = d {
+                *s = *norm;
+            }
+        }
+    } else if let Some(sp) = &h.spacings {
+        if sp.len() != dimension {
+            return Err(invalid(
+                path,
+                format!(
+                    "'spacings' has {} numbers but dimension is {dimension}",
+                    sp.len()
+                ),
+            ));
+        }
+        for (s, v) in spacing.iter_mut().zip(sp) {
+            if v.is_finite() {
+                *s = *v;
+            }
+        }
+    }
+    let n = check_dims(path, dims, ty, opts)?;
+
+    // Where the data is.
+    let (data_file, mut offset) = match &h.data_file {
+        Some(name) => {
+            if name == "LIST" || name.contains('%') || name.split_whitespace().count() > 1 {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "data file '{}' is a file list, which is not supported",
+                        clip(name)
+                    ),
+                ));
+            }
+            let dir = path.parent().unwrap_or(Path::new("."));
+            (dir.join(name), 0u64)
+        }
+        None if attached => (path.to_owned(), data_offset as u64),
+        None => {
+            return Err(invalid(
+                path,
+                "header has no blank line before data and no 'data file' field",
+            ));
+        }
+    };
+    if h.line_skip > 0 {
+        offset = skip_lines(&data_file, offset, h.line_skip)?;
+    }
+    let value_bytes = n as u64 * ty.size() as u64;
+    let (offset, skip_decoded) = match (h.byte_skip, encoding) {
+        (-1, Encoding::Raw) => {
+            let len = std::fs::metadata(&data_file)
+                .map_err(|e| io_error(&data_file, e))?
+                .len();
+            if len < offset + value_bytes {
+                return Err(invalid(
+                    &data_file,
+                    format!(
+                        "data truncated: the header promises {value_bytes} bytes at the end of the file but the file has only {}",
+                        len.saturating_sub(offset)
+                    ),
+                ));
+            }
+            (len - value_bytes, 0)
+        }
+        (-1, _) => {
+            return Err(invalid(
+                path,
+                "'byte skip: -1' is only allowed with raw encoding",
+            ));
+        }
+        (b, _) if b < -1 => return Err(invalid(path, format!("'byte skip: {b}' is invalid"))),
+        (b, Encoding::Raw) => (offset + b as u64, 0),
+        (b, _) => (offset, b as u64),
+    };
+    let spec = DataSpec {
+        file: data_file,
+        offset,
+        skip_decoded,
+        encoding,
+        ty,
+        big_endian,
+        count: n,
+        tail: Tail::Error,
+    };
+    let (values, warnings) = read_data(&spec)?;
+    let format = format!(
+        "NRRD{} ({})",
+        if attached { "" } else { " detached" },
+        encoding.name()
+    );
+    finish(path, dims, spacing, values, ty, format, opts, warnings)
+}
+
+fn is_magic(line: &str) -> bool {
+    line.len() == 8 && line.starts_with("NRRD000") && line.as_bytes()[7].is_ascii_digit()
+}
+
+/// At most 60 characters of user text, for messages.
+pub(crate) fn clip(s: &str) -> String {
+    let mut out: String = s.chars().take(60).collect();
+    if s.chars().count() > 60 {
+        out.push('…');
+    }
+    out
+}
+
+#[derive(Default)]
+struct Header {
+    dimension: Option<usize>,
+    sizes: Option<Vec<usize>>,
+    ty: Option<String>,
+    encoding: Option<String>,
+    endian: Option<String>,
+    spacings: Option<Vec<f64>>,
+    directions: Option<Vec<Option<f64>>>,
+    byte_skip: i64,
+    line_skip: u64,
+    data_file: Option<String>,
+}
+
+impl Header {
+    fn set(&mut self, path: &Path, field: &str, value: &str) -> Result<(), ReadError> {
+        let bad = |what: &str| invalid(path, format!("bad '{field}': {what} '{}'", clip(value)));
+        match field {
+            "dimension" => self.dimension = Some(value.parse().map_err(|_| bad("not a number"))?),
+            "sizes" => {
+                self.sizes = Some(super::parse_numbers(value).ok_or_else(|| bad("not sizes"))?)
+            }
+            "type" => self.ty = Some(value.to_owned()),
+            "encoding" => self.encoding = Some(value.to_owned()),
+            "endian" => self.endian = Some(value.to_owned()),
+            "spacings" => {
+                let v = value
+                    .split_whitespace()
+                    .map(|t| t.parse::<f64>().ok())
+                    .collect::<Option<Vec<_>>>()
+                    .ok_or_else(|| bad("not numbers"))?;
+                self.spacings = Some(v);
+            }
+            "space directions" => {
+                let mut dirs = Vec::new();
+                for t in value.split_whitespace() {
+                    if t == "none" {
+                        dirs.push(None);
+                        continue;
+                    }
+                    let inner = t
+                        .strip_prefix('(')
+                        .and_then(|t| t.strip_suffix(')'))
+                        .ok_or_else(|| bad("expected (x,y,z) vectors"))?;
+                    let comps = inner
+                        .split(',')
+                        .map(|c| c.trim().parse::<f64>().ok())
+                        .collect::<Option<Vec<_>>>()
+                        .ok_or_else(|| bad("not numbers"))?;
+                    let norm = comps.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    dirs.push(Some(norm));
+                }
+                self.directions = Some(dirs);
+            }
+            "byte skip" => self.byte_skip = value.parse().map_err(|_| bad("not a number"))?,
+            "line skip" => self.line_skip = value.parse().map_err(|_| bad("not a number"))?,
+            "data file" | "datafile" => self.data_file = Some(value.to_owned()),
+            _ => {} // content, kinds, space, space origin, ...: not needed.
+        }
+        Ok(())
+    }
+}
+
+/// The offset after `lines` more newlines from `offset` in `file`.
+fn skip_lines(file: &Path, offset: u64, lines: u64) -> Result<u64, ReadError> {
+    let mut f = std::fs::File::open(file).map_err(|e| io_error(file, e))?;
+    f.seek(SeekFrom::Start(offset))
+        .map_err(|e| io_error(file, e))?;
+    let mut r = BufReader::new(f);
+    let mut pos = offset;
+    let mut sink = Vec::new();
+    for i in 0..lines {
+        sink.clear();
+        // Lines are bounded by the file; cap each to 1 MiB to stay cheap.
+        let k = (&mut r)
+            .take(1 << 20)
+            .read_until(b'\n', &mut sink)
+            .map_err(|e| io_error(file, e))?;
+        if k == 0 || sink.last() != Some(&b'\n') {
+            return Err(invalid(
+                file,
+                format!("data truncated: 'line skip: {lines}' but the file ends after {i} lines"),
+            ));
+        }
+        pos += k as u64;
+    }
+    Ok(pos)
+}
+
+use std::io::Read as _;

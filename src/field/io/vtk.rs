@@ -1,0 +1,220 @@
+//! VTK legacy files (`.vtk`), `DATASET STRUCTURED_POINTS` only: the first
+//! `SCALARS` array of `POINT_DATA`, binary (big-endian, as the VTK file
+//! format specifies) or ASCII.
+//!
+//! The header is the lines up to the `LOOKUP_TABLE` line that follows
+//! `SCALARS` (required by the spec); binary data starts on the next byte.
+//! Anything after the array (more arrays) is ignored. `DIMENSIONS`,
+//! `SPACING` (or the old `ASPECT_RATIO`) and `ORIGIN` may come in any order;
+//! keywords are matched without case. `long` and `unsigned_long` are read as
+//! 64-bit (what VTK writes on Linux and macOS).
+
+use super::data::{DataSpec, Encoding, Tail, read_data};
+use super::nrrd::clip;
+use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid};
+use std::path::Path;
+
+const MAX_HEADER: usize = 1 << 20;
+
+/// Reads a legacy `.vtk` file.
+pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
+    let mut after_scalars = false;
+    let mut index = 0;
+    let mut not_vtk = false;
+    let (lines, data_offset) = super::read_header_lines(path, MAX_HEADER, |line| {
+        index += 1;
+        if index == 1 && !line.starts_with("# vtk DataFile") {
+            not_vtk = true;
+            return true;
+        }
+        if index <= 2 {
+            return false; // the title may hold any text
+        }
+        let kw = line
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_ascii_uppercase();
+        if kw == "SCALARS" {
+            after_scalars = true;
+            return false;
+        }
+        after_scalars && kw == "LOOKUP_TABLE"
+    })?;
+    if not_vtk {
+        return Err(invalid(
+            path,
+            "not a VTK legacy file (does not start with '# vtk DataFile')",
+        ));
+    }
+    if data_offset == usize::MAX {
+        return Err(invalid(
+            path,
+            "no 'SCALARS name type' followed by 'LOOKUP_TABLE' line: no point scalars to read",
+        ));
+    }
+    let mut it = lines
+        .iter()
+        .skip(2)
+        .map(|l| l.trim())
+        .filter(|l| !l.is_empty());
+    let mode = it.next().unwrap_or("").to_ascii_uppercase();
+    let encoding = match mode.as_str() {
+        "BINARY" => Encoding::Raw,
+        "ASCII" => Encoding::Ascii,
+        other => {
+            return Err(invalid(
+                path,
+                format!("line 3 must be ASCII or BINARY, not '{}'", clip(other)),
+            ));
+        }
+    };
+    let mut dims: Option<[usize; 3]> = None;
+    let mut spacing = [1.0f64; 3];
+    let mut point_data: Option<usize> = None;
+    let mut scalar_type: Option<ScalarType> = None;
+    for line in it {
+        let mut tok = line.split_whitespace();
+        let kw = tok.next().unwrap_or("").to_ascii_uppercase();
+        let rest: Vec<&str> = tok.collect();
+        let bad = |what: &str| invalid(path, format!("bad {kw} line '{}': {what}", clip(line)));
+        match kw.as_str() {
+            "DATASET" => {
+                let kind = rest
+                    .first()
+                    .map(|s| s.to_ascii_uppercase())
+                    .unwrap_or_default();
+                if kind != "STRUCTURED_POINTS" {
+                    return Err(invalid(
+                        path,
+                        format!(
+                            "VTK dataset '{}' is not supported (only STRUCTURED_POINTS)",
+                            clip(&kind)
+                        ),
+                    ));
+                }
+            }
+            "DIMENSIONS" => {
+                let d: Vec<usize> = parse_all(&rest).ok_or_else(|| bad("expected three sizes"))?;
+                let [x, y, z] = d[..] else {
+                    return Err(bad("expected three sizes"));
+                };
+                dims = Some([x, y, z]);
+            }
+            "SPACING" | "ASPECT_RATIO" => {
+                let s: Vec<f64> = parse_all(&rest).ok_or_else(|| bad("expected three numbers"))?;
+                let [x, y, z] = s[..] else {
+                    return Err(bad("expected three numbers"));
+                };
+                spacing = [x, y, z];
+            }
+            "ORIGIN" => {}
+            "POINT_DATA" => {
+                let [n] = rest[..] else {
+                    return Err(bad("expected a count"));
+                };
+                point_data = Some(n.parse().map_err(|_| bad("expected a count"))?);
+            }
+            "CELL_DATA" => {
+                if point_data.is_none() {
+                    return Err(invalid(
+                        path,
+                        "CELL_DATA before POINT_DATA is not supported",
+                    ));
+                }
+            }
+            "SCALARS" => {
+                if point_data.is_none() {
+                    return Err(invalid(
+                        path,
+                        "SCALARS before POINT_DATA (cell scalars are not supported)",
+                    ));
+                }
+                let name = rest
+                    .get(1)
+                    .ok_or_else(|| bad("expected 'SCALARS name type'"))?;
+                let ty = match name.to_ascii_lowercase().as_str() {
+                    "unsigned_char" => ScalarType::U8,
+                    "char" | "signed_char" => ScalarType::I8,
+                    "unsigned_short" => ScalarType::U16,
+                    "short" => ScalarType::I16,
+                    "unsigned_int" => ScalarType::U32,
+                    "int" => ScalarType::I32,
+                    "unsigned_long" | "vtktypeuint64" => ScalarType::U64,
+                    "long" | "vtktypeint64" => ScalarType::I64,
+                    "float" => ScalarType::F32,
+                    "double" => ScalarType::F64,
+                    other => {
+                        return Err(invalid(
+                            path,
+                            format!("unknown or unsupported VTK type '{}'", clip(other)),
+                        ));
+                    }
+                };
+                if let Some(c) = rest.get(2)
+                    && *c != "1"
+                {
+                    return Err(invalid(
+                        path,
+                        format!("SCALARS with {} components is not supported", clip(c)),
+                    ));
+                }
+                scalar_type = Some(ty);
+            }
+            "LOOKUP_TABLE" => {}
+            "FIELD"
+            | "VECTORS"
+            | "NORMALS"
+            | "TENSORS"
+            | "TEXTURE_COORDINATES"
+            | "COLOR_SCALARS" => {
+                return Err(invalid(
+                    path,
+                    format!("{kw} before the point SCALARS is not supported"),
+                ));
+            }
+            other => {
+                return Err(invalid(
+                    path,
+                    format!("unexpected keyword '{}'", clip(other)),
+                ));
+            }
+        }
+    }
+    let dims = dims.ok_or_else(|| invalid(path, "missing DIMENSIONS"))?;
+    let ty = scalar_type.ok_or_else(|| invalid(path, "missing SCALARS"))?;
+    let n = check_dims(path, dims, ty, opts)?;
+    if point_data != Some(n) {
+        return Err(invalid(
+            path,
+            format!(
+                "POINT_DATA {} does not match DIMENSIONS {dims:?} ({n} points)",
+                point_data.unwrap_or(0)
+            ),
+        ));
+    }
+    let spec = DataSpec {
+        file: path.to_owned(),
+        offset: data_offset as u64,
+        skip_decoded: 0,
+        encoding,
+        ty,
+        big_endian: true,
+        count: n,
+        tail: Tail::Ignore,
+    };
+    let (values, warnings) = read_data(&spec)?;
+    let format = format!(
+        "VTK legacy ({})",
+        if encoding == Encoding::Raw {
+            "binary"
+        } else {
+            "ascii"
+        }
+    );
+    finish(path, dims, spacing, values, ty, format, opts, warnings)
+}
+
+fn parse_all<T: std::str::FromStr>(tokens: &[&str]) -> Option<Vec<T>> {
+    tokens.iter().map(|t| t.parse().ok()).collect()
+}
