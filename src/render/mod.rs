@@ -1,1 +1,100 @@
-//! (in progress)
+//! The wgpu renderer: lit triangle meshes drawn into an offscreen texture.
+//!
+//! Like rerun's `re_renderer`, it knows nothing of contour trees or of the
+//! UI: it holds meshes keyed by a `u64` id with a style each, and draws them
+//! from a [`Camera`] into its own colour and depth textures. The same code
+//! serves the egui 3D view, `flexiso render` ([`headless`]) and the tests.
+//!
+//! # Using it
+//! ```text
+//! let mut r = Renderer::new(&device, Renderer::sample_count_for(&adapter));
+//! r.set_mesh(&device, &queue, id, &positions, &normals, &indices)?; // when the contour changes
+//! r.set_style(id, [0.9, 0.5, 0.2, 1.0], true, false);              // cheap, any time
+//! r.set_bounds(volume_min, volume_max);
+//! let mut camera = Camera::default();
+//! camera.fit(volume_min, volume_max);
+//! r.render(&device, &queue, &camera, width_px, height_px);          // each frame
+//! let hit = r.pick(&camera, w, h, pointer_x, pointer_y);           // Some((id, position))
+//! ```
+//!
+//! **In egui** (eframe with the `wgpu` renderer): keep the [`Renderer`],
+//! the [`Camera`] and an [`EguiTexture`] in the 3D view panel. Each frame,
+//! with `rs = frame.wgpu_render_state()` (an `Option`; without it show a
+//! message instead of the view):
+//! ```text
+//! let size_px = (rect.size() * ui.pixels_per_point()).round();
+//! renderer.render(&rs.device, &rs.queue, &camera, size_px.x as u32, size_px.y as u32);
+//! let id = tex.update(&mut rs.renderer.write(), &rs.device, &renderer);
+//! if let Some(id) = id { ui.put(rect, egui::Image::new((id, rect.size()))); }
+//! ```
+//! `render` submits its own command buffer, which the queue runs before
+//! egui's, so no paint callback is needed. (Inside a paint callback's
+//! `prepare`, use [`Renderer::render_with_encoder`] instead; the texture id
+//! must then be registered outside, e.g. after the first frame.) Mouse:
+//! drag → [`Camera::orbit`], secondary drag → [`Camera::pan`], scroll →
+//! [`Camera::zoom`], click → [`Renderer::pick`] with the pointer in the
+//! rect's own coordinates and the rect's size (points are fine: only the
+//! ratios matter).
+//!
+//! # Conventions
+//! - Colours are **sRGB** in `[0, 1]` with straight alpha, like
+//!   `egui::Color32::to_normalized_gamma_f32()`; lighting happens in linear
+//!   space. The output texture is [`COLOUR_FORMAT`] (`Rgba8Unorm`) holding
+//!   sRGB-encoded bytes: what egui samples from a native texture and what
+//!   a PNG stores, so both show the same colours.
+//! - World up is +Z; see [`Camera`].
+//! - Opaque meshes (alpha = 1) are drawn first with depth writes; then the
+//!   bounding box; then transparent meshes back to front by the distance of
+//!   their box centre from the eye, depth-tested but not depth-writing.
+//!   Transparency within one mesh is not sorted (order-independent
+//!   transparency is left out).
+//! - Lighting is two-sided: a headlight with a specular spot, plus a fill
+//!   light from the upper left; the side a normal points away from is
+//!   darker. Normals need not be consistent with the triangle winding.
+//! - MSAA 4× when [`Renderer::sample_count_for`] says the adapter can.
+//! - Geometry is uploaded only in [`Renderer::set_mesh`]; styles, bounds and
+//!   camera changes cost a uniform write. Picking is a CPU ray cast against
+//!   a CPU copy of each mesh (12 bytes per vertex + 12 per triangle), see
+//!   [`geometry`] for the cost.
+
+mod camera;
+mod egui_texture;
+pub mod geometry;
+pub mod headless;
+mod renderer;
+
+pub use camera::Camera;
+pub use egui_texture::EguiTexture;
+pub use geometry::{compute_normals, icosphere};
+pub use headless::{Gpu, HeadlessMesh, render_to_image};
+pub use renderer::{
+    COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,
+};
+
+/// What can go wrong while rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// No graphics adapter was found.
+    #[error(
+        "no graphics adapter found ({0}); on a machine without a GPU install Mesa's \
+         software drivers (apt-get install mesa-vulkan-drivers libvulkan1)"
+    )]
+    NoAdapter(String),
+    /// The adapter refused to open a device.
+    #[error("the graphics adapter refused to open a device: {0}")]
+    NoDevice(String),
+    /// A mesh handed to [`Renderer::set_mesh`] is malformed.
+    #[error("mesh {id}: {reason}")]
+    InvalidMesh {
+        /// The mesh id.
+        id: u64,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// [`Renderer::read_image`] was called before any render.
+    #[error("nothing has been rendered yet")]
+    NothingRendered,
+    /// Copying the image back from the GPU failed.
+    #[error("reading the rendered image back failed: {0}")]
+    Readback(String),
+}

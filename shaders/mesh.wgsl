@@ -1,0 +1,81 @@
+// Lit triangle meshes: two-sided headlight + fill lighting.
+//
+// Colours arrive linear (converted on the CPU from sRGB); lighting is done in
+// linear space and the result is sRGB-encoded here, because the target is a
+// plain Rgba8Unorm texture that egui samples as gamma-encoded colour.
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    // xyz: eye position (world).
+    eye: vec4<f32>,
+    // xyz: unit direction towards the fill light (world).
+    fill_dir: vec4<f32>,
+    // Bounding-box line colour, sRGB, straight alpha (used by lines.wgsl).
+    line_colour: vec4<f32>,
+};
+
+struct Style {
+    // Linear rgb, straight alpha.
+    colour: vec4<f32>,
+    // x: 1 when highlighted.
+    flags: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(1) @binding(0) var<uniform> style: Style;
+
+struct VsIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+};
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+};
+
+@vertex
+fn vs_main(in: VsIn) -> VsOut {
+    var out: VsOut;
+    out.clip = frame.view_proj * vec4<f32>(in.position, 1.0);
+    out.world = in.position;
+    out.normal = in.normal;
+    return out;
+}
+
+fn srgb_from_linear(c: vec3<f32>) -> vec3<f32> {
+    let c0 = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    let lo = c0 * 12.92;
+    let hi = 1.055 * pow(c0, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(hi, lo, c0 <= vec3<f32>(0.0031308));
+}
+
+@fragment
+fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    let v = normalize(frame.eye.xyz - in.world);
+    let len = length(in.normal);
+    // A zero normal (degenerate input) is lit as if facing the viewer.
+    let n = select(v, in.normal / len, len > 1e-12);
+    let facing = dot(n, v);
+    // Two-sided: light the side we see. The side the normal points away
+    // from (the "inside") is drawn darker; smoothstep avoids a hard seam at
+    // silhouettes where interpolated normals graze the view direction.
+    let nf = select(-n, n, facing >= 0.0);
+    let side = mix(0.62, 1.0, smoothstep(-0.08, 0.08, facing));
+
+    let head = max(dot(nf, v), 0.0);
+    let fill = max(dot(nf, frame.fill_dir.xyz), 0.0);
+    // Headlight specular: half vector of a light at the eye is v itself.
+    let spec = pow(head, 48.0);
+
+    let base = style.colour.rgb;
+    var lit = base * (0.16 + 0.70 * head + 0.28 * fill) * side + vec3<f32>(0.16) * spec * side;
+
+    if style.flags.x > 0.5 {
+        // Highlight: a warm rim where the surface turns away, and a lift.
+        let rim = pow(1.0 - head, 2.0);
+        lit = mix(lit * 1.15 + base * 0.08, vec3<f32>(1.0, 0.78, 0.18), 0.85 * rim);
+    }
+    return vec4<f32>(srgb_from_linear(lit), style.colour.a);
+}

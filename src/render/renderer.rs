@@ -1,0 +1,974 @@
+//! The offscreen mesh renderer (see the module doc of [`crate::render`]).
+
+use std::collections::BTreeMap;
+
+use glam::{Mat4, Vec3};
+use wgpu::util::DeviceExt;
+
+use super::RenderError;
+use super::camera::Camera;
+use super::geometry::{CpuMesh, ray_box};
+
+/// Format of the colour texture [`Renderer::render`] produces: plain
+/// (not sRGB-aware) RGBA8 holding sRGB-encoded colour, which is what egui
+/// expects of a native texture and what a PNG stores.
+pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// Format of the depth buffer.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Default colour of a mesh that has no style yet (sRGB, a light steel blue).
+pub const DEFAULT_COLOUR: [f32; 4] = [0.69, 0.77, 0.87, 1.0];
+
+/// Default background (sRGB, opaque dark grey, close to egui's dark panels).
+pub const DEFAULT_BACKGROUND: [f32; 4] = [0.10, 0.10, 0.11, 1.0];
+
+/// Colour of the bounding box lines (sRGB, straight alpha: faint grey).
+const LINE_COLOUR: [f32; 4] = [0.75, 0.75, 0.78, 0.45];
+
+/// Bytes per vertex on the GPU: position and normal, interleaved.
+const VERTEX_BYTES: u64 = 24;
+
+/// How a mesh is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshStyle {
+    /// sRGB colour in `[0, 1]` with straight alpha; alpha < 1 draws the mesh
+    /// transparent (after the opaque ones, back to front), alpha 0 hides it.
+    pub colour: [f32; 4],
+    /// Hidden meshes are neither drawn nor picked.
+    pub visible: bool,
+    /// Drawn with a warm rim (the selection).
+    pub highlighted: bool,
+}
+
+impl Default for MeshStyle {
+    fn default() -> Self {
+        MeshStyle {
+            colour: DEFAULT_COLOUR,
+            visible: true,
+            highlighted: false,
+        }
+    }
+}
+
+/// Uniforms shared by every draw of a frame (layout matches `Frame` in
+/// the shaders).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FrameUniform {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 4],
+    fill_dir: [f32; 4],
+    line_colour: [f32; 4],
+}
+
+/// Per-mesh uniforms (layout matches `Style` in mesh.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct StyleUniform {
+    colour: [f32; 4],
+    flags: [f32; 4],
+}
+
+/// One mesh: the CPU copy for picking, its GPU buffers and style.
+struct Mesh {
+    cpu: CpuMesh,
+    vertex_buffer: Option<wgpu::Buffer>,
+    index_buffer: Option<wgpu::Buffer>,
+    index_count: u32,
+    style: MeshStyle,
+    style_buffer: wgpu::Buffer,
+    style_bind: wgpu::BindGroup,
+    style_dirty: bool,
+}
+
+impl Mesh {
+    fn drawn(&self) -> bool {
+        self.style.visible && self.style.colour[3] > 0.0 && self.index_count > 0
+    }
+}
+
+/// The render targets, recreated when the size changes.
+struct Target {
+    size: (u32, u32),
+    /// Multisampled colour, when MSAA is on.
+    msaa: Option<wgpu::TextureView>,
+    /// The single-sampled result (resolve target with MSAA).
+    colour: wgpu::Texture,
+    colour_view: wgpu::TextureView,
+    depth: wgpu::TextureView,
+}
+
+/// The bounding box lines.
+struct BoundsLines {
+    min: [f32; 3],
+    max: [f32; 3],
+    buffers: Option<(wgpu::Buffer, wgpu::Buffer)>,
+}
+
+/// Draws a set of lit meshes into its own offscreen colour and depth
+/// textures. See the [module doc](crate::render) for how to use it.
+pub struct Renderer {
+    sample_count: u32,
+    style_layout: wgpu::BindGroupLayout,
+    opaque: wgpu::RenderPipeline,
+    transparent: wgpu::RenderPipeline,
+    lines: wgpu::RenderPipeline,
+    frame_buffer: wgpu::Buffer,
+    frame_bind: wgpu::BindGroup,
+    meshes: BTreeMap<u64, Mesh>,
+    bounds: Option<BoundsLines>,
+    target: Option<Target>,
+    generation: u64,
+    background: [f32; 4],
+}
+
+impl Renderer {
+    /// The MSAA sample count to pass to [`Renderer::new`] for this adapter:
+    /// 4 when the adapter can multisample and resolve both [`COLOUR_FORMAT`]
+    /// and [`DEPTH_FORMAT`] 4×, else 1.
+    pub fn sample_count_for(adapter: &wgpu::Adapter) -> u32 {
+        use wgpu::TextureFormatFeatureFlags as F;
+        let colour = adapter.get_texture_format_features(COLOUR_FORMAT).flags;
+        let depth = adapter.get_texture_format_features(DEPTH_FORMAT).flags;
+        if colour.sample_count_supported(4)
+            && colour.contains(F::MULTISAMPLE_RESOLVE)
+            && depth.sample_count_supported(4)
+        {
+            4
+        } else {
+            1
+        }
+    }
+
+    /// Creates the pipelines. `sample_count` is 1 or 4 (anything else is
+    /// taken as 1); get it from [`Renderer::sample_count_for`].
+    pub fn new(device: &wgpu::Device, sample_count: u32) -> Self {
+        let sample_count = if sample_count == 4 { 4 } else { 1 };
+        let uniform_entry = |visibility| wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("flexiso frame"),
+            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX_FRAGMENT)],
+        });
+        let style_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("flexiso mesh style"),
+            entries: &[uniform_entry(wgpu::ShaderStages::FRAGMENT)],
+        });
+        let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("flexiso frame"),
+            size: std::mem::size_of::<FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("flexiso frame"),
+            layout: &frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame_buffer.as_entire_binding(),
+            }],
+        });
+
+        let mesh_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("flexiso mesh.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/mesh.wgsl").into()),
+        });
+        let lines_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("flexiso lines.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/lines.wgsl").into()),
+        });
+        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("flexiso mesh"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&style_layout)],
+            immediate_size: 0,
+        });
+        let lines_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("flexiso lines"),
+            bind_group_layouts: &[Some(&frame_layout)],
+            immediate_size: 0,
+        });
+
+        let mesh_attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let line_attributes = wgpu::vertex_attr_array![0 => Float32x3];
+        // Straight-alpha "over" for colour; alpha accumulates so an opaque
+        // background stays opaque (egui composites the texture as is).
+        let blend = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::SrcAlpha,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        };
+        let multisample = wgpu::MultisampleState {
+            count: sample_count,
+            mask: !0,
+            alpha_to_coverage_enabled: false,
+        };
+        let mesh_pipeline = |label, depth_write: bool, blend: Option<wgpu::BlendState>| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&mesh_layout),
+                vertex: wgpu::VertexState {
+                    module: &mesh_shader,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: VERTEX_BYTES,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &mesh_attributes,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    // Contours are open or closed and seen from both sides.
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample,
+                fragment: Some(wgpu::FragmentState {
+                    module: &mesh_shader,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: COLOUR_FORMAT,
+                        blend,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let opaque = mesh_pipeline("flexiso opaque meshes", true, None);
+        // Transparent meshes test depth against the opaque ones but do not
+        // write it, so all transparent layers blend.
+        let transparent = mesh_pipeline("flexiso transparent meshes", false, Some(blend));
+        let lines = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("flexiso bounds"),
+            layout: Some(&lines_layout),
+            vertex: wgpu::VertexState {
+                module: &lines_shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &line_attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::LineList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &lines_shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOUR_FORMAT,
+                    blend: Some(blend),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+
+        Renderer {
+            sample_count,
+            style_layout,
+            opaque,
+            transparent,
+            lines,
+            frame_buffer,
+            frame_bind,
+            meshes: BTreeMap::new(),
+            bounds: None,
+            target: None,
+            generation: 0,
+            background: DEFAULT_BACKGROUND,
+        }
+    }
+
+    /// The MSAA sample count in use (1 or 4).
+    pub fn sample_count(&self) -> u32 {
+        self.sample_count
+    }
+
+    /// Adds or replaces mesh `id`. `normals` has one normal per position, or
+    /// is empty to have them computed from the triangles
+    /// ([`compute_normals`](super::compute_normals)); `indices` holds three
+    /// corners per triangle. A replaced mesh keeps its style; buffers are
+    /// reused when the new data fits. An empty mesh is kept (and draws
+    /// nothing). Errors leave the previous mesh in place.
+    pub fn set_mesh(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        id: u64,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        indices: &[u32],
+    ) -> Result<(), RenderError> {
+        let invalid = |reason: String| RenderError::InvalidMesh { id, reason };
+        if !normals.is_empty() && normals.len() != positions.len() {
+            return Err(invalid(format!(
+                "{} normals for {} positions",
+                normals.len(),
+                positions.len()
+            )));
+        }
+        if indices.len() % 3 != 0 {
+            return Err(invalid(format!(
+                "{} indices is not a whole number of triangles",
+                indices.len()
+            )));
+        }
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(invalid(format!(
+                "index {bad} is out of range for {} positions",
+                positions.len()
+            )));
+        }
+        let max = device.limits().max_buffer_size;
+        let vertex_bytes = positions.len() as u64 * VERTEX_BYTES;
+        let index_bytes = indices.len() as u64 * 4;
+        if vertex_bytes > max || index_bytes > max || indices.len() > u32::MAX as usize {
+            return Err(invalid(format!(
+                "{} vertices and {} triangles exceed the device's buffer limit of {max} bytes",
+                positions.len(),
+                indices.len() / 3
+            )));
+        }
+
+        let computed;
+        let normals = if normals.is_empty() {
+            computed = super::compute_normals(positions, indices);
+            &computed[..]
+        } else {
+            normals
+        };
+        let mut vertices = Vec::with_capacity(positions.len() * 6);
+        for (p, n) in positions.iter().zip(normals) {
+            vertices.extend_from_slice(p);
+            vertices.extend_from_slice(n);
+        }
+
+        let entry = match self.meshes.remove(&id) {
+            Some(old) => old,
+            None => {
+                let (style_buffer, style_bind) = self.style_resources(device);
+                Mesh {
+                    cpu: CpuMesh::default(),
+                    vertex_buffer: None,
+                    index_buffer: None,
+                    index_count: 0,
+                    style: MeshStyle::default(),
+                    style_buffer,
+                    style_bind,
+                    style_dirty: true,
+                }
+            }
+        };
+        let mut entry = entry;
+        let empty = indices.is_empty();
+        entry.vertex_buffer = if empty {
+            None
+        } else {
+            Some(upload(
+                device,
+                queue,
+                entry.vertex_buffer.take(),
+                bytemuck::cast_slice(&vertices),
+                wgpu::BufferUsages::VERTEX,
+                "flexiso mesh vertices",
+            ))
+        };
+        entry.index_buffer = if empty {
+            None
+        } else {
+            Some(upload(
+                device,
+                queue,
+                entry.index_buffer.take(),
+                bytemuck::cast_slice(indices),
+                wgpu::BufferUsages::INDEX,
+                "flexiso mesh indices",
+            ))
+        };
+        entry.index_count = indices.len() as u32;
+        entry.cpu = CpuMesh::new(positions, indices);
+        self.meshes.insert(id, entry);
+        Ok(())
+    }
+
+    fn style_resources(&self, device: &wgpu::Device) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("flexiso mesh style"),
+            size: std::mem::size_of::<StyleUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("flexiso mesh style"),
+            layout: &self.style_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buffer.as_entire_binding(),
+            }],
+        });
+        (buffer, bind)
+    }
+
+    /// Removes mesh `id` (and its GPU buffers); false if there was none.
+    pub fn remove_mesh(&mut self, id: u64) -> bool {
+        self.meshes.remove(&id).is_some()
+    }
+
+    /// Removes every mesh.
+    pub fn clear_meshes(&mut self) {
+        self.meshes.clear();
+    }
+
+    /// The ids of the meshes held, ascending.
+    pub fn mesh_ids(&self) -> Vec<u64> {
+        self.meshes.keys().copied().collect()
+    }
+
+    /// Whether mesh `id` is held.
+    pub fn has_mesh(&self, id: u64) -> bool {
+        self.meshes.contains_key(&id)
+    }
+
+    /// Sets how mesh `id` is drawn: `colour` is sRGB in `[0, 1]` with
+    /// straight alpha (alpha < 1: transparent). Only a uniform is rewritten
+    /// at the next render; the geometry is not touched. False (and no
+    /// effect) if there is no such mesh: set the mesh first.
+    pub fn set_style(
+        &mut self,
+        id: u64,
+        colour: [f32; 4],
+        visible: bool,
+        highlighted: bool,
+    ) -> bool {
+        let Some(mesh) = self.meshes.get_mut(&id) else {
+            return false;
+        };
+        let style = MeshStyle {
+            colour: colour.map(|c| {
+                if c.is_finite() {
+                    c.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            }),
+            visible,
+            highlighted,
+        };
+        if mesh.style != style {
+            mesh.style = style;
+            mesh.style_dirty = true;
+        }
+        true
+    }
+
+    /// The style of mesh `id`.
+    pub fn style(&self, id: u64) -> Option<MeshStyle> {
+        self.meshes.get(&id).map(|m| m.style)
+    }
+
+    /// The bounding box of the visible meshes `(min, max)`, or None when
+    /// nothing is drawn (for [`Camera::fit`]).
+    pub fn visible_bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for m in self.meshes.values().filter(|m| m.drawn()) {
+            lo = lo.min(m.cpu.bbox.0);
+            hi = hi.max(m.cpu.bbox.1);
+        }
+        lo.cmple(hi).all().then(|| (lo.to_array(), hi.to_array()))
+    }
+
+    /// Draws the faint box `[min, max]` (the volume's extent).
+    pub fn set_bounds(&mut self, min: [f32; 3], max: [f32; 3]) {
+        if let Some(b) = &self.bounds
+            && b.min == min
+            && b.max == max
+        {
+            return;
+        }
+        self.bounds = Some(BoundsLines {
+            min,
+            max,
+            buffers: None,
+        });
+    }
+
+    /// Stops drawing the bounding box.
+    pub fn clear_bounds(&mut self) {
+        self.bounds = None;
+    }
+
+    /// Sets the background (sRGB, `[0, 1]`; alpha is written as given, keep
+    /// it 1 for egui).
+    pub fn set_background(&mut self, colour: [f32; 4]) {
+        self.background = colour;
+    }
+
+    /// Renders the scene from `camera` into the renderer's own
+    /// `width × height` textures (recreated when the size changes; sizes are
+    /// clamped to `1..=max_texture_dimension_2d`) and submits the work to
+    /// `queue`. Returns the single-sampled colour texture ([`COLOUR_FORMAT`]);
+    /// [`Renderer::colour_view`] is its view.
+    pub fn render(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> &wgpu::Texture {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("flexiso render"),
+        });
+        self.render_with_encoder(device, queue, &mut encoder, camera, width, height);
+        queue.submit([encoder.finish()]);
+        &self.ensure_target(device, width, height).colour
+    }
+
+    /// Like [`Renderer::render`] but records into `encoder` instead of
+    /// submitting (for egui_wgpu's `CallbackTrait::prepare`). Uniform and
+    /// buffer updates go through `queue.write_buffer`, which wgpu orders
+    /// before the next submission.
+    pub fn render_with_encoder(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) {
+        self.ensure_target(device, width, height);
+        let Some(target) = &self.target else {
+            return;
+        };
+        let (w, h) = target.size;
+        let aspect = w as f32 / h as f32;
+        let eye = camera.eye();
+        // The fill light comes from above-left-behind the viewer, in world
+        // coordinates derived from the view so it turns with the camera.
+        let view_inv = camera.view().inverse();
+        let fill = view_inv
+            .transform_vector3(Vec3::new(-0.6, 0.7, 0.4))
+            .normalize_or(Vec3::Z);
+        let frame = FrameUniform {
+            view_proj: camera.view_proj(aspect).to_cols_array_2d(),
+            eye: eye.extend(1.0).to_array(),
+            fill_dir: fill.extend(0.0).to_array(),
+            line_colour: LINE_COLOUR,
+        };
+        queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
+
+        for mesh in self.meshes.values_mut().filter(|m| m.style_dirty) {
+            let c = mesh.style.colour;
+            let uniform = StyleUniform {
+                colour: [
+                    linear_from_srgb(c[0]),
+                    linear_from_srgb(c[1]),
+                    linear_from_srgb(c[2]),
+                    c[3],
+                ],
+                flags: [f32::from(u8::from(mesh.style.highlighted)), 0.0, 0.0, 0.0],
+            };
+            queue.write_buffer(&mesh.style_buffer, 0, bytemuck::bytes_of(&uniform));
+            mesh.style_dirty = false;
+        }
+        if let Some(b) = &mut self.bounds
+            && b.buffers.is_none()
+        {
+            b.buffers = Some(box_lines(device, b.min, b.max));
+        }
+
+        // Opaque first (any order: depth sorts them), then the transparent
+        // ones back to front by the distance of their box centre from the
+        // eye. Ties are broken by id so the order is deterministic.
+        let mut opaque = Vec::new();
+        let mut transparent = Vec::new();
+        for (&id, m) in self.meshes.iter().filter(|(_, m)| m.drawn()) {
+            if m.style.colour[3] >= 1.0 {
+                opaque.push(m);
+            } else {
+                transparent.push((m.cpu.centre().distance_squared(eye), id, m));
+            }
+        }
+        transparent.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+
+        let (view, resolve) = match &target.msaa {
+            Some(msaa) => (msaa, Some(&target.colour_view)),
+            None => (&target.colour_view, None),
+        };
+        let bg = self.background.map(f64::from);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("flexiso scene"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: resolve,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: bg[0],
+                        g: bg[1],
+                        b: bg[2],
+                        a: bg[3],
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &target.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.frame_bind, &[]);
+        let draw = |pass: &mut wgpu::RenderPass<'_>, m: &Mesh| {
+            if let (Some(vb), Some(ib)) = (&m.vertex_buffer, &m.index_buffer) {
+                pass.set_bind_group(1, &m.style_bind, &[]);
+                pass.set_vertex_buffer(0, vb.slice(..));
+                pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..m.index_count, 0, 0..1);
+            }
+        };
+        pass.set_pipeline(&self.opaque);
+        for m in opaque {
+            draw(&mut pass, m);
+        }
+        if let Some(BoundsLines {
+            buffers: Some((vb, ib)),
+            ..
+        }) = &self.bounds
+        {
+            pass.set_pipeline(&self.lines);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..24, 0, 0..1);
+        }
+        pass.set_pipeline(&self.transparent);
+        for (_, _, m) in transparent {
+            draw(&mut pass, m);
+        }
+    }
+
+    /// Creates the targets when missing or of another size.
+    fn ensure_target(&mut self, device: &wgpu::Device, width: u32, height: u32) -> &Target {
+        let max = device.limits().max_texture_dimension_2d.max(1);
+        let size = (width.clamp(1, max), height.clamp(1, max));
+        if self.target.as_ref().is_none_or(|t| t.size != size) {
+            self.target = Some(create_target(device, size, self.sample_count));
+            self.generation += 1;
+        }
+        match &self.target {
+            Some(t) => t,
+            None => unreachable!("the target was just created"),
+        }
+    }
+
+    /// The colour texture of the last render, if any.
+    pub fn colour_texture(&self) -> Option<&wgpu::Texture> {
+        self.target.as_ref().map(|t| &t.colour)
+    }
+
+    /// A view of the colour texture of the last render, if any: register it
+    /// with egui_wgpu (see [`EguiTexture`](super::EguiTexture)).
+    pub fn colour_view(&self) -> Option<&wgpu::TextureView> {
+        self.target.as_ref().map(|t| &t.colour_view)
+    }
+
+    /// Counts target (re)creations: when it changes, the texture behind
+    /// [`Renderer::colour_view`] is a new one and must be re-registered with
+    /// egui.
+    pub fn target_generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The size of the current targets, if any.
+    pub fn target_size(&self) -> Option<(u32, u32)> {
+        self.target.as_ref().map(|t| t.size)
+    }
+
+    /// Copies the last render back to the CPU (blocks until the GPU is
+    /// done). For screenshots and tests.
+    pub fn read_image(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<image::RgbaImage, RenderError> {
+        let target = self.target.as_ref().ok_or(RenderError::NothingRendered)?;
+        read_texture(device, queue, &target.colour, target.size)
+    }
+
+    /// The nearest visible mesh under pixel `(x, y)` of a `width × height`
+    /// viewport (origin top-left, any unit as long as all four agree) seen
+    /// from `camera`: its id and the world position hit. Casts a ray on the
+    /// CPU against the stored triangles, skipping meshes whose bounding box
+    /// the ray misses or enters beyond the nearest hit so far.
+    pub fn pick(
+        &self,
+        camera: &Camera,
+        width: f32,
+        height: f32,
+        x: f32,
+        y: f32,
+    ) -> Option<(u64, [f32; 3])> {
+        if !(width > 0.0 && height > 0.0 && x.is_finite() && y.is_finite()) {
+            return None;
+        }
+        let ndc = [2.0 * x / width - 1.0, 1.0 - 2.0 * y / height];
+        let (origin, dir) = camera.ray(ndc, width / height);
+        let mut candidates: Vec<(f32, u64, &Mesh)> = self
+            .meshes
+            .iter()
+            .filter(|(_, m)| m.drawn())
+            .filter_map(|(&id, m)| {
+                ray_box(origin, dir, m.cpu.bbox.0, m.cpu.bbox.1).map(|t| (t, id, m))
+            })
+            .collect();
+        candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut best: Option<(f32, u64, Vec3)> = None;
+        for (enter, id, m) in candidates {
+            if best.is_some_and(|(t, _, _)| enter > t) {
+                break;
+            }
+            if let Some((t, p)) = m.cpu.ray_hit(origin, dir)
+                && best.is_none_or(|(bt, _, _)| t < bt)
+            {
+                best = Some((t, id, p));
+            }
+        }
+        best.map(|(_, id, p)| (id, p.to_array()))
+    }
+
+    /// The world-to-clip matrix the last render used for a `width × height`
+    /// viewport (to project world points to the screen, e.g. labels).
+    pub fn view_proj(camera: &Camera, width: f32, height: f32) -> Mat4 {
+        camera.view_proj(if height > 0.0 { width / height } else { 1.0 })
+    }
+}
+
+/// Writes `data` into `old` when it is big enough, else into a new buffer
+/// (with 25% headroom so a growing mesh is not reallocated every time).
+fn upload(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    old: Option<wgpu::Buffer>,
+    data: &[u8],
+    usage: wgpu::BufferUsages,
+    label: &str,
+) -> wgpu::Buffer {
+    if let Some(b) = old
+        && b.size() >= data.len() as u64
+    {
+        queue.write_buffer(&b, 0, data);
+        return b;
+    }
+    let max = device.limits().max_buffer_size;
+    let size = (data.len() as u64 + data.len() as u64 / 4)
+        .min(max)
+        .max(data.len() as u64);
+    // COPY_BUFFER_ALIGNMENT: sizes of mapped/written buffers are multiples of 4.
+    let size = size.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    queue.write_buffer(&buffer, 0, data);
+    buffer
+}
+
+/// The 8 corners and 12 edges of a box.
+fn box_lines(device: &wgpu::Device, lo: [f32; 3], hi: [f32; 3]) -> (wgpu::Buffer, wgpu::Buffer) {
+    let corners: Vec<[f32; 3]> = (0..8)
+        .map(|i| {
+            [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        })
+        .collect();
+    // Each edge joins corners differing in one bit.
+    let mut edges: Vec<u32> = Vec::with_capacity(24);
+    for i in 0u32..8 {
+        for bit in [1, 2, 4] {
+            if i & bit == 0 {
+                edges.extend([i, i | bit]);
+            }
+        }
+    }
+    let vb = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("flexiso bounds vertices"),
+        contents: bytemuck::cast_slice(&corners),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let ib = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("flexiso bounds indices"),
+        contents: bytemuck::cast_slice(&edges),
+        usage: wgpu::BufferUsages::INDEX,
+    });
+    (vb, ib)
+}
+
+fn create_target(device: &wgpu::Device, size: (u32, u32), sample_count: u32) -> Target {
+    let extent = wgpu::Extent3d {
+        width: size.0,
+        height: size.1,
+        depth_or_array_layers: 1,
+    };
+    let texture = |label, format, samples, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: extent,
+            mip_level_count: 1,
+            sample_count: samples,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let colour = texture(
+        "flexiso colour",
+        COLOUR_FORMAT,
+        1,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+    );
+    let msaa = (sample_count > 1).then(|| {
+        texture(
+            "flexiso colour msaa",
+            COLOUR_FORMAT,
+            sample_count,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default())
+    });
+    let depth = texture(
+        "flexiso depth",
+        DEPTH_FORMAT,
+        sample_count,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    )
+    .create_view(&Default::default());
+    let colour_view = colour.create_view(&Default::default());
+    Target {
+        size,
+        msaa,
+        colour,
+        colour_view,
+        depth,
+    }
+}
+
+/// Copies an RGBA8 texture into an image: rows are padded to 256 bytes in
+/// the staging buffer (`COPY_BYTES_PER_ROW_ALIGNMENT`) and unpadded here.
+fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    (width, height): (u32, u32),
+) -> Result<image::RgbaImage, RenderError> {
+    let row = width as u64 * 4;
+    let padded = row.next_multiple_of(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT));
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("flexiso readback"),
+        size: padded * u64::from(height),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("flexiso readback"),
+    });
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded as u32),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
+    queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let mut pixels = Vec::with_capacity((row * u64::from(height)) as usize);
+    {
+        let mapped = buffer
+            .get_mapped_range(..)
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        for r in mapped.chunks_exact(padded as usize) {
+            pixels.extend_from_slice(&r[..row as usize]);
+        }
+    }
+    buffer.unmap();
+    image::RgbaImage::from_raw(width, height, pixels)
+        .ok_or_else(|| RenderError::Readback("pixel buffer of the wrong size".into()))
+}
+
+/// sRGB transfer function, decoding.
+fn linear_from_srgb(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}

@@ -1,0 +1,253 @@
+//! Headless rendering and picking on whatever adapter wgpu finds (Mesa's
+//! llvmpipe on machines without a GPU). Without an adapter these tests print
+//! a note and pass, unless `FLEXISO_REQUIRE_GPU=1`, where they fail.
+
+use flexiso::render::{
+    Camera, DEFAULT_BACKGROUND, Gpu, HeadlessMesh, Renderer, icosphere, render_to_image,
+};
+use glam::Vec3;
+
+/// The GPU, or None (skip) when there is none and none is required.
+fn gpu() -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(g) => {
+            eprintln!("adapter: {}", g.describe());
+            Some(g)
+        }
+        Err(e) => {
+            assert!(
+                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
+                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
+            );
+            eprintln!("skipping: {e}");
+            None
+        }
+    }
+}
+
+/// Whether the `FLEXISO_RENDER_TEST_OUT` folder is set; then the images
+/// are saved there for a person to look at.
+fn save(name: &str, img: &image::RgbaImage) {
+    if let Ok(dir) = std::env::var("FLEXISO_RENDER_TEST_OUT") {
+        let path = std::path::Path::new(&dir).join(name);
+        img.save(&path).expect("save test image");
+        eprintln!("saved {}", path.display());
+    }
+}
+
+fn background() -> [u8; 4] {
+    DEFAULT_BACKGROUND.map(|c| (c * 255.0).round() as u8)
+}
+
+fn is_background(p: &image::Rgba<u8>) -> bool {
+    p.0.iter()
+        .zip(background())
+        .all(|(a, b)| (i32::from(*a) - i32::from(b)).abs() <= 1)
+}
+
+/// The radius in pixels of a sphere of radius `r` at distance `d` from the
+/// eye, seen on a viewport `h` pixels high.
+fn projected_radius(camera: &Camera, r: f32, d: f32, h: u32) -> f32 {
+    let half = (r / d).asin().tan();
+    half / (0.5 * camera.fov_y).tan() * 0.5 * h as f32
+}
+
+#[test]
+fn sphere_covers_its_disc_lit_from_the_viewer() {
+    let Some(gpu) = gpu() else { return };
+    let (p, n, i) = icosphere([0.0; 3], 1.0, 4);
+    let red = [0.9, 0.15, 0.1, 1.0];
+    let mut camera = Camera::default();
+    camera.fit([-1.5; 3], [1.5; 3]);
+    let (w, h) = (240, 180);
+    let img = render_to_image(
+        &[HeadlessMesh {
+            positions: &p,
+            normals: &n,
+            indices: &i,
+            colour: red,
+        }],
+        None,
+        Some(&camera),
+        w,
+        h,
+    )
+    .expect("render");
+    save("sphere.png", &img);
+    assert_eq!(img.dimensions(), (w, h));
+
+    // Coverage: the lit disc has the area the projection predicts (±8%;
+    // the icosphere is slightly inside the true sphere).
+    let covered = img.pixels().filter(|p| !is_background(p)).count() as f32;
+    let rad = projected_radius(&camera, 1.0, camera.distance, h);
+    let expected = std::f32::consts::PI * rad * rad;
+    assert!(
+        (covered / expected - 1.0).abs() < 0.08,
+        "covered {covered} pixels, expected about {expected}"
+    );
+
+    // Colour at the centre: red, bright (headlight faces it).
+    let c = img.get_pixel(w / 2, h / 2).0;
+    // (The specular spot of the headlight whitens it a little.)
+    assert!(
+        c[0] > 200 && c[0] > c[1] + 80 && c[0] > c[2] + 80,
+        "centre {c:?}"
+    );
+    // Near the rim the headlight grazes: darker than the centre.
+    let rim = img.get_pixel(w / 2 + (0.93 * rad) as u32, h / 2).0;
+    assert!(
+        rim[0] < c[0] - 40 && !is_background(img.get_pixel(w / 2 + (0.93 * rad) as u32, h / 2)),
+        "rim {rim:?} centre {c:?}"
+    );
+    // Corners: background.
+    for (x, y) in [(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)] {
+        assert!(is_background(img.get_pixel(x, y)), "corner {x},{y}");
+    }
+}
+
+/// Two spheres on the view axis, the near one small: the near one is in
+/// front at the centre whichever order they were added in, and picking the
+/// centre returns it, with a point on its near surface.
+#[test]
+fn nearer_mesh_wins_in_image_and_pick() {
+    let Some(gpu) = gpu() else { return };
+    let mut camera = Camera::default();
+    camera.fit([-2.0; 3], [2.0; 3]);
+    let towards_eye = (camera.eye() - camera.target).normalize();
+    let near_centre = camera.target + 1.5 * towards_eye;
+    let (fp, fnn, fi) = icosphere(camera.target.to_array(), 1.0, 3);
+    let (np, nn, ni) = icosphere(near_centre.to_array(), 0.4, 3);
+    let (w, h) = (200, 200);
+    for order in [[1u64, 2], [2, 1]] {
+        let mut r = gpu.renderer();
+        for id in order {
+            let (p, n, i) = if id == 1 {
+                (&fp, &fnn, &fi)
+            } else {
+                (&np, &nn, &ni)
+            };
+            r.set_mesh(&gpu.device, &gpu.queue, id, p, n, i)
+                .expect("mesh");
+        }
+        assert!(r.set_style(1, [0.9, 0.1, 0.1, 1.0], true, false));
+        assert!(r.set_style(2, [0.1, 0.8, 0.1, 1.0], true, false));
+        r.render(&gpu.device, &gpu.queue, &camera, w, h);
+        let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
+        save(&format!("two_spheres_{}.png", order[0]), &img);
+        let c = img.get_pixel(w / 2, h / 2).0;
+        assert!(
+            c[1] > 150 && c[1] > c[0] + 60 && c[1] > c[2] + 60,
+            "centre should be the near green sphere: {c:?}"
+        );
+        // Off the small sphere but on the big one: red.
+        let off = img.get_pixel(w / 2, h / 2 + 20).0;
+        assert!(off[0] > 100 && off[1] < 80, "red sphere around it: {off:?}");
+
+        let (id, pos) = r
+            .pick(&camera, w as f32, h as f32, w as f32 / 2.0, h as f32 / 2.0)
+            .expect("pick at the centre");
+        assert_eq!(id, 2);
+        let expected = near_centre + 0.4 * towards_eye;
+        assert!(
+            (Vec3::from(pos) - expected).length() < 0.02,
+            "{pos:?} vs {expected}"
+        );
+        assert_eq!(r.pick(&camera, w as f32, h as f32, 1.0, 1.0), None);
+        // Hidden meshes are not picked: the far sphere shows through.
+        r.set_style(2, [0.1, 0.8, 0.1, 1.0], false, false);
+        let (id, _) = r
+            .pick(&camera, w as f32, h as f32, w as f32 / 2.0, h as f32 / 2.0)
+            .expect("pick the far sphere");
+        assert_eq!(id, 1);
+    }
+}
+
+/// A transparent sphere in front of an opaque one blends with it; the box
+/// lines are drawn; the highlighted style changes the rim; a resize makes a
+/// new target.
+#[test]
+fn transparency_bounds_highlight_and_resize() {
+    let Some(gpu) = gpu() else { return };
+    let mut camera = Camera::default();
+    camera.fit([-2.0; 3], [2.0; 3]);
+    let towards_eye = (camera.eye() - camera.target).normalize();
+    let (fp, fnn, fi) = icosphere(camera.target.to_array(), 0.8, 3);
+    let (np, nn, ni) = icosphere((camera.target + 1.2 * towards_eye).to_array(), 0.6, 3);
+    let mut r = gpu.renderer();
+    r.set_mesh(&gpu.device, &gpu.queue, 10, &fp, &fnn, &fi)
+        .expect("far");
+    r.set_mesh(&gpu.device, &gpu.queue, 20, &np, &nn, &ni)
+        .expect("near");
+    r.set_style(10, [0.9, 0.1, 0.1, 1.0], true, false);
+    r.set_style(20, [0.1, 0.2, 0.95, 0.5], true, false);
+    r.set_bounds([-2.0; 3], [2.0; 3]);
+    let (w, h) = (200, 160);
+    r.render(&gpu.device, &gpu.queue, &camera, w, h);
+    let g0 = r.target_generation();
+    let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    save("transparent.png", &img);
+    let c = img.get_pixel(w / 2, h / 2).0;
+    assert!(
+        c[0] > 60 && c[2] > 60,
+        "red behind half-transparent blue: {c:?}"
+    );
+    // The box: some non-background pixels far from the spheres.
+    let lines = img
+        .enumerate_pixels()
+        .filter(|(x, y, p)| {
+            let (dx, dy) = (*x as f32 - w as f32 / 2.0, *y as f32 - h as f32 / 2.0);
+            dx.hypot(dy) > 60.0 && !is_background(p)
+        })
+        .count();
+    assert!(lines > 50, "bounding box lines: {lines} pixels");
+
+    // Highlight: rim pixels change.
+    r.set_style(10, [0.9, 0.1, 0.1, 1.0], true, true);
+    r.render(&gpu.device, &gpu.queue, &camera, w, h);
+    let hi = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    save("highlight.png", &hi);
+    assert_eq!(r.target_generation(), g0, "same size: same target");
+    let changed = img
+        .pixels()
+        .zip(hi.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(changed > 200, "highlight changed {changed} pixels");
+
+    r.render(&gpu.device, &gpu.queue, &camera, 120, 90);
+    assert_ne!(r.target_generation(), g0);
+    assert_eq!(r.target_size(), Some((120, 90)));
+    let small = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    assert_eq!(small.dimensions(), (120, 90));
+}
+
+#[test]
+fn malformed_meshes_are_refused_and_empty_ones_draw_nothing() {
+    let Some(gpu) = gpu() else { return };
+    let mut r: Renderer = gpu.renderer();
+    let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let n = [[0.0, 0.0, 1.0]; 3];
+    assert!(
+        r.set_mesh(&gpu.device, &gpu.queue, 1, &p, &n, &[0, 1, 3])
+            .is_err()
+    );
+    assert!(
+        r.set_mesh(&gpu.device, &gpu.queue, 1, &p, &n, &[0, 1])
+            .is_err()
+    );
+    assert!(
+        r.set_mesh(&gpu.device, &gpu.queue, 1, &p, &n[..2], &[0, 1, 2])
+            .is_err()
+    );
+    assert!(!r.has_mesh(1));
+    // Missing normals are computed.
+    r.set_mesh(&gpu.device, &gpu.queue, 1, &p, &[], &[0, 1, 2])
+        .expect("no normals");
+    r.set_mesh(&gpu.device, &gpu.queue, 2, &[], &[], &[])
+        .expect("empty");
+    assert_eq!(r.mesh_ids(), vec![1, 2]);
+    let camera = Camera::default();
+    r.render(&gpu.device, &gpu.queue, &camera, 64, 64);
+    assert!(r.remove_mesh(2));
+    assert!(!r.set_style(2, [1.0; 4], true, false));
+}
