@@ -67,6 +67,30 @@ pub trait Scalar: Copy + PartialOrd + Send + Sync + 'static {
     fn to_f64(self) -> f64;
 }
 
+/// The total order on vertices the engine sweeps in: by value, ties by id
+/// (simulation of simplicity).
+pub trait VertexOrder: Sync {
+    /// True when vertex `a` comes after vertex `b`.
+    fn above(&self, a: u32, b: u32) -> bool;
+
+    /// Prefetches the values of the star of `v` (see
+    /// [`Mesh::prefetch_star`](crate::mesh::Mesh::prefetch_star)).
+    fn prefetch<M: crate::mesh::Mesh>(&self, _mesh: &M, _v: u32) {}
+}
+
+impl<T: Scalar> VertexOrder for [T] {
+    #[inline(always)]
+    fn above(&self, a: u32, b: u32) -> bool {
+        let (fa, fb) = (self[a as usize], self[b as usize]);
+        fa > fb || (fa == fb && a > b)
+    }
+
+    #[inline(always)]
+    fn prefetch<M: crate::mesh::Mesh>(&self, mesh: &M, v: u32) {
+        mesh.prefetch_star(v, self);
+    }
+}
+
 macro_rules! impl_scalar {
     ($($t:ty),*) => {$(
         impl Scalar for $t {
@@ -296,11 +320,7 @@ impl ScalarField {
     /// equal value and higher id (simulation of simplicity).
     #[inline]
     pub fn is_above(&self, a: u32, b: u32) -> bool {
-        fn above<T: Scalar>(v: &[T], a: u32, b: u32) -> bool {
-            let (fa, fb) = (v[a as usize], v[b as usize]);
-            fa > fb || (fa == fb && a > b)
-        }
-        with_values!(&self.values, v => above(v, a, b))
+        with_values!(&self.values, v => v.above(a, b))
     }
 
     /// The vertices sorted ascending by (value, id).

@@ -20,6 +20,28 @@ pub trait Mesh: Sync {
 
     /// Calls `f` once for every vertex that shares an edge with `v`.
     fn for_each_neighbour(&self, v: u32, f: impl FnMut(u32));
+
+    /// Hints the memory system that `data[u]` will soon be read for the
+    /// neighbours u of `v` (a sweep visits vertices in value order, far
+    /// apart in memory, so overlapping these misses is most of its speed).
+    /// The default does nothing.
+    #[inline(always)]
+    fn prefetch_star<T>(&self, _v: u32, _data: &[T]) {}
+
+    /// Calls `f` with one neighbour of `v` from each connected component of
+    /// the part of v's link made of the neighbours `in_set` selects (the
+    /// upper or lower link). The sweeps need one union-find lookup per
+    /// component, not per neighbour: neighbours joined by a link edge were
+    /// already united when the later of them was swept. This default visits
+    /// every selected neighbour, which is correct, only slower.
+    fn for_each_link_component(&self, v: u32, in_set: impl FnMut(u32) -> bool, mut f: impl FnMut(u32)) {
+        let mut in_set = in_set;
+        self.for_each_neighbour(v, |u| {
+            if in_set(u) {
+                f(u)
+            }
+        });
+    }
 }
 
 /// The 7 positive Freudenthal edge offsets (dx, dy, dz); their negatives are
@@ -58,6 +80,66 @@ pub struct FreudenthalGrid {
     directions: Vec<[i64; 3]>,
     div_x: StrengthReducedU32,
     div_y: StrengthReducedU32,
+    /// For every subset (bit mask over `directions`) of a vertex's link, the
+    /// representatives of its connected components (see [`LinkTable`]).
+    link: LinkTable,
+}
+
+/// Connected components of every subset of the link of a grid vertex.
+///
+/// Two neighbours v+a and v+b are joined in the link iff (v, v+a, v+b) is a
+/// triangle, which in the Freudenthal triangulation holds iff a - b is also
+/// an edge offset (the three points then form a chain of the cube lattice).
+/// Entry `mask`: number of components in the low 4 bits, then the direction
+/// index (4 bits) of one representative per component.
+#[derive(Clone, Debug)]
+struct LinkTable {
+    entries: Vec<u64>,
+}
+
+impl LinkTable {
+    fn new(directions: &[[i64; 3]]) -> Self {
+        let k = directions.len();
+        let is_offset = |d: [i64; 3]| {
+            EDGE_OFFSETS
+                .iter()
+                .any(|o| *o == d || [-o[0], -o[1], -o[2]] == d)
+        };
+        let adjacent: Vec<u32> = (0..k)
+            .map(|i| {
+                (0..k)
+                    .filter(|&j| {
+                        let (a, b) = (directions[i], directions[j]);
+                        j != i && is_offset([a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                    })
+                    .fold(0u32, |m, j| m | 1 << j)
+            })
+            .collect();
+        let entries = (0u32..1 << k)
+            .map(|mask| {
+                let (mut left, mut count, mut entry) = (mask, 0u64, 0u64);
+                while left != 0 {
+                    let rep = left.trailing_zeros();
+                    // Flood the component of `rep` within `mask`.
+                    let mut comp = 1u32 << rep;
+                    loop {
+                        let grown = (0..k as u32)
+                            .filter(|&i| comp & (1 << i) != 0)
+                            .fold(comp, |c, i| c | (adjacent[i as usize] & mask));
+                        if grown == comp {
+                            break;
+                        }
+                        comp = grown;
+                    }
+                    left &= !comp;
+                    entry |= (rep as u64) << (4 + 4 * count);
+                    count += 1;
+                }
+                entry | count
+            })
+            .collect();
+        Self { entries }
+    }
 }
 
 impl FreudenthalGrid {
@@ -81,9 +163,10 @@ impl FreudenthalGrid {
         Self {
             dims,
             interior_offsets,
-            directions,
             div_x: StrengthReducedU32::new(dims[0].max(1) as u32),
             div_y: StrengthReducedU32::new(dims[1].max(1) as u32),
+            link: LinkTable::new(&directions),
+            directions,
         }
     }
 
@@ -112,9 +195,72 @@ impl FreudenthalGrid {
     }
 }
 
+impl FreudenthalGrid {
+    /// Bit mask over `directions` of the neighbours that exist at `v`.
+    #[inline(always)]
+    fn present(&self, v: u32) -> u32 {
+        let [x, y, z] = self.coords(v);
+        let [dx, dy, dz] = self.dims.map(|d| d as u32);
+        let inside = |c: u32, d: u32| d == 1 || (c > 0 && c + 1 < d);
+        let all = (1u32 << self.directions.len()) - 1;
+        if inside(x, dx) && inside(y, dy) && inside(z, dz) {
+            return all;
+        }
+        let c = [x as i64, y as i64, z as i64];
+        let mut mask = 0;
+        for (i, d) in self.directions.iter().enumerate() {
+            if (0..3).all(|a| {
+                let n = c[a] + d[a];
+                n >= 0 && n < self.dims[a] as i64
+            }) {
+                mask |= 1 << i;
+            }
+        }
+        mask
+    }
+}
+
 impl Mesh for FreudenthalGrid {
     fn num_vertices(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    #[inline(always)]
+    fn prefetch_star<T>(&self, v: u32, data: &[T]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let sy = self.dims[0] as isize;
+            let sz = sy * self.dims[1] as isize;
+            // The star spans these 7 rows; one line each covers x-1..x+1
+            // but at line boundaries.
+            for o in [0, sy, -sy, sz, -sz, sz + sy, -sz - sy] {
+                let i = v as isize + o;
+                if i >= 0 && (i as usize) < data.len() {
+                    // SAFETY: prefetch is a hint and never faults; the
+                    // address is inside `data` anyway.
+                    unsafe { _mm_prefetch(data.as_ptr().offset(i) as *const i8, _MM_HINT_T0) };
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (v, data);
+    }
+
+    #[inline(always)]
+    fn for_each_link_component(&self, v: u32, mut in_set: impl FnMut(u32) -> bool, mut f: impl FnMut(u32)) {
+        let present = self.present(v);
+        let mut mask = 0usize;
+        for (i, &o) in self.interior_offsets.iter().enumerate() {
+            if present & (1 << i) != 0 && in_set((v as i64 + o) as u32) {
+                mask |= 1 << i;
+            }
+        }
+        let entry = self.link.entries[mask];
+        for c in 0..(entry & 0xf) {
+            let rep = (entry >> (4 + 4 * c)) & 0xf;
+            f((v as i64 + self.interior_offsets[rep as usize]) as u32);
+        }
     }
 
     #[inline(always)]
@@ -232,6 +378,51 @@ mod tests {
                     .collect();
                 expect.sort_unstable();
                 assert_eq!(nv, expect, "dims {dims:?} v {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn link_components_match_flooding_the_link() {
+        // Random subsets of the link of an interior and a boundary vertex:
+        // the representatives must hit each component of the subset's
+        // induced subgraph (mesh edges among the selected neighbours) once.
+        let g = FreudenthalGrid::new([4, 4, 4]);
+        let mut seed = 12345u64;
+        for v in [g.vertex(1, 2, 1), g.vertex(0, 0, 0), g.vertex(3, 1, 0), g.vertex(0, 3, 2)] {
+            let nb = neighbours(&g, v);
+            for _ in 0..300 {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let chosen: Vec<u32> = nb.iter().copied().filter(|&u| (seed >> (u % 60)) & 1 == 1).collect();
+                let mut reps = Vec::new();
+                g.for_each_link_component(v, |u| chosen.contains(&u), |u| reps.push(u));
+                // Components of the chosen set under edges u1-u2 that form a
+                // triangle with v (both neighbours of each other).
+                let mut comp: Vec<usize> = (0..chosen.len()).collect();
+                for i in 0..chosen.len() {
+                    for j in 0..chosen.len() {
+                        if neighbours(&g, chosen[i]).contains(&chosen[j]) {
+                            let (a, b) = (comp[i], comp[j]);
+                            for c in comp.iter_mut() {
+                                if *c == a {
+                                    *c = b;
+                                }
+                            }
+                        }
+                    }
+                }
+                let mut labels: Vec<usize> = reps
+                    .iter()
+                    .map(|r| comp[chosen.iter().position(|c| c == r).expect("rep is chosen")])
+                    .collect();
+                let n_reps = labels.len();
+                labels.sort_unstable();
+                labels.dedup();
+                assert_eq!(labels.len(), n_reps, "one rep per component");
+                let mut all = comp.clone();
+                all.sort_unstable();
+                all.dedup();
+                assert_eq!(labels.len(), all.len(), "every component has a rep");
             }
         }
     }

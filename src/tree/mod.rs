@@ -14,7 +14,7 @@
 mod merge;
 pub mod sweep;
 
-use crate::field::ScalarField;
+use crate::field::{ScalarField, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
 use merge::NODE_FLAG;
@@ -141,14 +141,18 @@ impl ContourTree {
         progress.stage("sort");
         let order = field.vertex_order();
         let sort = t.elapsed();
-        let (tree, mut times) = Self::build(&field.mesh(), &order, progress)?;
+        let mesh = field.mesh();
+        let (tree, mut times) =
+            crate::with_values!(field.values(), v => Self::build(&mesh, v.as_slice(), &order, progress))?;
         times.sort = sort;
         Ok((tree, times))
     }
 
-    /// Builds the tree of any mesh given its vertex order (ascending).
-    pub fn build<M: Mesh>(
+    /// Builds the tree of any mesh given its vertex order: `values` compares
+    /// two vertices, `order` lists them ascending.
+    pub fn build<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
+        values: &O,
         order: &[u32],
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), Cancelled> {
@@ -162,11 +166,11 @@ impl ContourTree {
         let (join, split) = rayon::join(
             || {
                 let t = Instant::now();
-                sweep::sweep(mesh, order.iter().rev().copied(), progress).map(|s| (s, t.elapsed()))
+                sweep::sweep(mesh, values, true, order, progress).map(|s| (s, t.elapsed()))
             },
             || {
                 let t = Instant::now();
-                sweep::sweep(mesh, order.iter().copied(), &Progress::new()).map(|s| (s, t.elapsed()))
+                sweep::sweep(mesh, values, false, order, &Progress::new()).map(|s| (s, t.elapsed()))
             },
         );
         let ((join, tj), (split, ts)) = (join?, split?);

@@ -8,12 +8,12 @@
 //! (the last vertex added to it) is absorbed by `v`, which is exactly the
 //! arc (w, v) of the augmented join tree.
 //!
-//! The union-find links every absorbed root *under the new vertex*
-//! ("link to newest"), so the root of a component is always its most
-//! recently added vertex and no separate "lowest vertex" array is needed.
-//! Paths are halved on every find. Memory: 4 bytes per vertex of union-find,
-//! 4 of parent, 1 of degree.
+//! The union-find is by rank with path halving; a root's own word holds the
+//! component's most recently added vertex, so no separate "lowest vertex"
+//! array is needed. Memory per sweep: 4 bytes per vertex of union-find, 1 of
+//! rank, 4 of parent, 1 of degree.
 
+use crate::field::VertexOrder;
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
 
@@ -30,35 +30,77 @@ pub struct SweepTree {
     pub children: Vec<u8>,
 }
 
-/// Sweeps `order` (the visiting order: descending for the join tree,
-/// ascending for the split tree) and returns the augmented sweep tree.
-pub fn sweep<M: Mesh>(
+/// Marks a union-find root; the rest of a root's word is the component's
+/// most recently added vertex (its lowest in the join sweep).
+const ROOT: u32 = 1 << 31;
+
+/// Sweeps `order` (the visiting order: descending for the join tree with
+/// `join = true`, ascending for the split tree) and returns the augmented
+/// sweep tree. `values` gives the vertex order; testing "already swept"
+/// on it rather than on the union-find keeps the hot loop in the compact
+/// value array (1 byte per vertex for uint8 scans) instead of 4 bytes.
+pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
-    order: impl Iterator<Item = u32>,
+    values: &O,
+    join: bool,
+    order: &[u32],
     progress: &Progress,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
+    // uf[x]: NONE before x is visited; ROOT | last vertex at a root;
+    // otherwise the parent in the union-find forest.
     let mut uf = vec![NONE; n];
+    let mut rank = vec![0u8; n];
     let mut parent = vec![NONE; n];
     let mut children = vec![0u8; n];
+    let mut reps: Vec<u32> = Vec::with_capacity(16);
     const CHECK_EVERY: usize = 1 << 20;
-    for (i, v) in order.enumerate() {
+    // How far ahead in the order to prefetch: enough vertices in flight to
+    // hide DRAM latency, few enough that the lines are still in L1/L2.
+    const AHEAD: usize = 12;
+    for i in 0..n {
         if i % CHECK_EVERY == 0 {
             progress.check(i, n)?;
         }
-        uf[v as usize] = v;
+        let at = |i: usize| if join { order[n - 1 - i] } else { order[i] };
+        let v = at(i);
+        if i + AHEAD < n {
+            let w = at(i + AHEAD);
+            values.prefetch(mesh, w);
+            mesh.prefetch_star(w, &uf);
+        }
+        let mut root = v;
+        uf[v as usize] = ROOT | v;
         let mut merged = 0u8;
-        mesh.for_each_neighbour(v, |u| {
-            if uf[u as usize] == NONE {
-                return; // not yet visited: on the other side of v
-            }
+        // One representative per component of the visited part of v's link.
+        reps.clear();
+        if join {
+            mesh.for_each_link_component(v, |u| values.above(u, v), |u| reps.push(u));
+        } else {
+            mesh.for_each_link_component(v, |u| values.above(v, u), |u| reps.push(u));
+        }
+        for &u in &reps {
             let r = find(&mut uf, u);
-            if r != v {
-                parent[r as usize] = v;
-                uf[r as usize] = v;
-                merged += 1;
+            if r == root {
+                continue;
             }
-        });
+            // Component r is absorbed at v: the augmented tree arc runs
+            // from its last vertex to v.
+            let last = uf[r as usize] & !ROOT;
+            parent[last as usize] = v;
+            merged += 1;
+            let (hi, lo) = if rank[r as usize] > rank[root as usize] {
+                (r, root)
+            } else {
+                (root, r)
+            };
+            if rank[hi as usize] == rank[lo as usize] {
+                rank[hi as usize] += 1;
+            }
+            uf[lo as usize] = hi;
+            uf[hi as usize] = ROOT | v;
+            root = hi;
+        }
         children[v as usize] = merged;
     }
     Ok(SweepTree { parent, children })
@@ -69,11 +111,15 @@ pub fn sweep<M: Mesh>(
 fn find(uf: &mut [u32], mut x: u32) -> u32 {
     loop {
         let p = uf[x as usize];
-        if p == x {
+        if p & ROOT != 0 {
             return x;
         }
         let gp = uf[p as usize];
+        if gp & ROOT != 0 {
+            return p;
+        }
         uf[x as usize] = gp;
         x = gp;
     }
 }
+
