@@ -70,11 +70,21 @@ fn flood_components(mesh: &FreudenthalGrid, keep: impl Fn(usize) -> bool) -> Vec
 /// Augmented join tree by definition: for each vertex v, each component C
 /// of {w > v} adjacent to v contributes the edge (lowest vertex of C, v).
 /// With `up = false`, the split tree (components of {w < v}, highest vertex).
-fn sweep_tree_by_definition(mesh: &FreudenthalGrid, rank: &[usize], up: bool) -> BTreeSet<(usize, usize)> {
+fn sweep_tree_by_definition(
+    mesh: &FreudenthalGrid,
+    rank: &[usize],
+    up: bool,
+) -> BTreeSet<(usize, usize)> {
     let n = rank.len();
     let mut edges = BTreeSet::new();
     for v in 0..n {
-        let beyond = |w: usize| if up { rank[w] > rank[v] } else { rank[w] < rank[v] };
+        let beyond = |w: usize| {
+            if up {
+                rank[w] > rank[v]
+            } else {
+                rank[w] < rank[v]
+            }
+        };
         let label = flood_components(mesh, beyond);
         let adjacent: BTreeSet<usize> = neighbours(mesh, v)
             .into_iter()
@@ -97,7 +107,11 @@ fn augmented_edges(tree: &ContourTree) -> Vec<(usize, usize)> {
     let mut edges = Vec::new();
     for (a, arc) in tree.arcs().iter().enumerate() {
         let mut chain = vec![tree.node(arc.lower).vertex as usize];
-        chain.extend(tree.arc_vertices(ArcId(a as u32)).iter().map(|&v| v as usize));
+        chain.extend(
+            tree.arc_vertices(ArcId(a as u32))
+                .iter()
+                .map(|&v| v as usize),
+        );
         chain.push(tree.node(arc.upper).vertex as usize);
         for w in chain.windows(2) {
             edges.push((w[0], w[1]));
@@ -108,7 +122,12 @@ fn augmented_edges(tree: &ContourTree) -> Vec<(usize, usize)> {
 
 /// Join (up = true) or split tree of a *tree graph* by a union-find sweep:
 /// an independent way to get them from the output.
-fn sweep_tree_of_graph(n: usize, edges: &[(usize, usize)], rank: &[usize], up: bool) -> BTreeSet<(usize, usize)> {
+fn sweep_tree_of_graph(
+    n: usize,
+    edges: &[(usize, usize)],
+    rank: &[usize],
+    up: bool,
+) -> BTreeSet<(usize, usize)> {
     let mut adj = vec![Vec::new(); n];
     for &(a, b) in edges {
         adj[a].push(b);
@@ -194,7 +213,10 @@ fn level_set_components(field: &ScalarField, h: f64) -> usize {
     let crossed = |s: &[usize]| {
         s.iter().any(|&v| field.value(v as u32) < h) && s.iter().any(|&v| field.value(v as u32) > h)
     };
-    let simplices: Vec<Vec<usize>> = top_simplices(dims).into_iter().filter(|s| crossed(s)).collect();
+    let simplices: Vec<Vec<usize>> = top_simplices(dims)
+        .into_iter()
+        .filter(|s| crossed(s))
+        .collect();
     if simplices.is_empty() {
         return 0;
     }
@@ -212,7 +234,12 @@ fn level_set_components(field: &ScalarField, h: f64) -> usize {
     let mut by_facet: HashMap<Vec<usize>, usize> = HashMap::new();
     for (i, s) in simplices.iter().enumerate() {
         for skip in 0..s.len() {
-            let mut facet: Vec<usize> = s.iter().enumerate().filter(|&(j, _)| j != skip).map(|(_, &v)| v).collect();
+            let mut facet: Vec<usize> = s
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != skip)
+                .map(|(_, &v)| v)
+                .collect();
             if !crossed(&facet) {
                 continue;
             }
@@ -225,11 +252,15 @@ fn level_set_components(field: &ScalarField, h: f64) -> usize {
             }
         }
     }
-    (0..simplices.len()).filter(|&i| find(&mut parent, i) == i).count()
+    (0..simplices.len())
+        .filter(|&i| find(&mut parent, i) == i)
+        .count()
 }
 
 fn build(field: &ScalarField) -> ContourTree {
-    ContourTree::from_field(field, &Progress::new()).expect("not cancelled").0
+    ContourTree::from_field(field, &Progress::new())
+        .expect("not cancelled")
+        .0
 }
 
 /// Checks (a), (b), (c) and the tree's own consistency.
@@ -241,7 +272,11 @@ fn check_against_oracles(field: &ScalarField) {
 
     // The tree is a tree: V - 1 superarcs, connected, arcs point up, every
     // vertex placed once, arc vertices ascending and strictly inside.
-    assert_eq!(tree.arcs().len() + 1, tree.nodes().len().max(1), "superarcs = supernodes - 1");
+    assert_eq!(
+        tree.arcs().len() + 1,
+        tree.nodes().len().max(1),
+        "superarcs = supernodes - 1"
+    );
     let edges = augmented_edges(&tree);
     assert_eq!(edges.len(), n - 1, "augmented tree has n - 1 arcs");
     for &(lo, hi) in &edges {
@@ -269,23 +304,46 @@ fn check_against_oracles(field: &ScalarField) {
         }
     }
     for (i, node) in tree.nodes().iter().enumerate() {
-        assert_eq!(tree.place(node.vertex), VertexPlace::Node(flexiso::tree::NodeId(i as u32)));
-        assert_eq!(tree.up_arcs(flexiso::tree::NodeId(i as u32)).len() as u32, node.up);
-        assert_eq!(tree.down_arcs(flexiso::tree::NodeId(i as u32)).len() as u32, node.down);
+        assert_eq!(
+            tree.place(node.vertex),
+            VertexPlace::Node(flexiso::tree::NodeId(i as u32))
+        );
+        assert_eq!(
+            tree.up_arcs(flexiso::tree::NodeId(i as u32)).len() as u32,
+            node.up
+        );
+        assert_eq!(
+            tree.down_arcs(flexiso::tree::NodeId(i as u32)).len() as u32,
+            node.down
+        );
     }
 
     // (a) join and split trees.
     let jt_def = sweep_tree_by_definition(&mesh, &rank, true);
     let st_def = sweep_tree_by_definition(&mesh, &rank, false);
-    assert_eq!(sweep_tree_of_graph(n, &edges, &rank, true), jt_def, "join tree");
-    assert_eq!(sweep_tree_of_graph(n, &edges, &rank, false), st_def, "split tree");
+    assert_eq!(
+        sweep_tree_of_graph(n, &edges, &rank, true),
+        jt_def,
+        "join tree"
+    );
+    assert_eq!(
+        sweep_tree_of_graph(n, &edges, &rank, false),
+        st_def,
+        "split tree"
+    );
 
     // (b) degrees by definition, for every vertex.
     let mut up_deg = vec![0u32; n];
     let mut down_deg = vec![0u32; n];
     for v in 0..n {
         for (up, deg) in [(true, &mut up_deg), (false, &mut down_deg)] {
-            let beyond = |w: usize| if up { rank[w] > rank[v] } else { rank[w] < rank[v] };
+            let beyond = |w: usize| {
+                if up {
+                    rank[w] > rank[v]
+                } else {
+                    rank[w] < rank[v]
+                }
+            };
             let label = flood_components(&mesh, beyond);
             let adjacent: BTreeSet<usize> = neighbours(&mesh, v)
                 .into_iter()
@@ -300,7 +358,11 @@ fn check_against_oracles(field: &ScalarField) {
             VertexPlace::Node(id) => (tree.node(id).up, tree.node(id).down),
             VertexPlace::Arc(_) => (1, 1),
         };
-        assert_eq!((up, down), (up_deg[v as usize], down_deg[v as usize]), "degrees of vertex {v}");
+        assert_eq!(
+            (up, down),
+            (up_deg[v as usize], down_deg[v as usize]),
+            "degrees of vertex {v}"
+        );
     }
 
     // (c) level set components at isovalues between consecutive values.
@@ -313,10 +375,15 @@ fn check_against_oracles(field: &ScalarField) {
             .arcs()
             .iter()
             .filter(|a| {
-                field.value(tree.node(a.lower).vertex) < h && field.value(tree.node(a.upper).vertex) > h
+                field.value(tree.node(a.lower).vertex) < h
+                    && field.value(tree.node(a.upper).vertex) > h
             })
             .count();
-        assert_eq!(spanning, level_set_components(field, h), "components at h = {h}");
+        assert_eq!(
+            spanning,
+            level_set_components(field, h),
+            "components at h = {h}"
+        );
     }
 }
 
@@ -399,7 +466,11 @@ fn nested_shell_splits_into_inside_and_outside_contours() {
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                let r = [x, y, z].iter().map(|&c| (c as i64 - 3).unsigned_abs()).max().unwrap_or(0);
+                let r = [x, y, z]
+                    .iter()
+                    .map(|&c| (c as i64 - 3).unsigned_abs())
+                    .max()
+                    .unwrap_or(0);
                 values[x + n * (y + n * z)] = match r {
                     0 => 2,
                     1 => 1,
@@ -421,7 +492,10 @@ fn nested_shell_splits_into_inside_and_outside_contours() {
     let spanning = tree
         .arcs()
         .iter()
-        .filter(|a| field.value(tree.node(a.lower).vertex) < 5.0 && field.value(tree.node(a.upper).vertex) > 5.0)
+        .filter(|a| {
+            field.value(tree.node(a.lower).vertex) < 5.0
+                && field.value(tree.node(a.upper).vertex) > 5.0
+        })
         .count();
     assert_eq!(spanning, 2);
     check_against_oracles(&field);

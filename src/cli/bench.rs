@@ -59,9 +59,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file() && is_volume(p))
         .filter(|p| {
-            args.only
-                .as_deref()
-                .is_none_or(|o| p.file_name().is_some_and(|n| n.to_string_lossy().contains(o)))
+            args.only.as_deref().is_none_or(|o| {
+                p.file_name()
+                    .is_some_and(|n| n.to_string_lossy().contains(o))
+            })
         })
         .collect();
     inputs.sort_by_key(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0));
@@ -82,17 +83,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let n = args.synthetic;
         let t = Instant::now();
         let field = Synthetic::cube(n).with_noise(0.05, 7).generate();
-        let row = bench_field(&format!("synthetic-noisy-{n}"), &field, t.elapsed(), args.repeat.max(1));
+        let row = bench_field(
+            &format!("synthetic-noisy-{n}"),
+            &field,
+            t.elapsed(),
+            args.repeat.max(1),
+        );
         println!("{}", format_row(&row));
     }
     Ok(())
 }
 
 fn is_volume(p: &std::path::Path) -> bool {
-    let name = p.file_name().map(|n| n.to_string_lossy().to_lowercase()).unwrap_or_default();
-    [".nrrd", ".nhdr", ".raw", ".mha", ".mhd", ".vti", ".vtk", ".nii", ".nii.gz"]
-        .iter()
-        .any(|e| name.ends_with(e))
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    [
+        ".nrrd", ".nhdr", ".raw", ".mha", ".mhd", ".vti", ".vtk", ".nii", ".nii.gz",
+    ]
+    .iter()
+    .any(|e| name.ends_with(e))
 }
 
 /// Builds the tree of `field` `repeat` times and keeps the fastest run.
@@ -116,7 +127,10 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             engine_bytes: peak.saturating_sub(base),
         };
         drop(tree);
-        if best.as_ref().is_none_or(|b| row.times.total() < b.times.total()) {
+        if best
+            .as_ref()
+            .is_none_or(|b| row.times.total() < b.times.total())
+        {
             best = Some(row);
         }
     }
@@ -127,8 +141,19 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
 pub fn header() -> String {
     format!(
         "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7}",
-        "dataset", "dims", "superarcs", "load", "sort", "join", "split", "merge", "augm", "total",
-        "s/Mvox", "peak MiB", "B/vert"
+        "dataset",
+        "dims",
+        "superarcs",
+        "load",
+        "sort",
+        "join",
+        "split",
+        "merge",
+        "augm",
+        "total",
+        "s/Mvox",
+        "peak MiB",
+        "B/vert"
     )
 }
 

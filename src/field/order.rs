@@ -22,9 +22,7 @@ pub fn vertex_order(values: &Values) -> Vec<u32> {
         Values::F64(v) => {
             let mut ids: Vec<u32> = (0..v.len() as u32).collect();
             ids.par_sort_unstable_by(|&a, &b| {
-                v[a as usize]
-                    .total_cmp(&v[b as usize])
-                    .then(a.cmp(&b))
+                v[a as usize].total_cmp(&v[b as usize]).then(a.cmp(&b))
             });
             // total_cmp orders -0.0 before 0.0; fix ties between them to id order.
             fix_signed_zero_ties(v, &mut ids);
@@ -39,7 +37,11 @@ pub fn vertex_order(values: &Values) -> Vec<u32> {
 fn f32_key(x: f32) -> u32 {
     let x = if x == 0.0 { 0.0 } else { x };
     let b = x.to_bits();
-    if b & 0x8000_0000 != 0 { !b } else { b | 0x8000_0000 }
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
 }
 
 fn counting_sort(keys: impl Iterator<Item = usize> + Clone, buckets: usize) -> Vec<u32> {
@@ -133,7 +135,12 @@ mod tests {
             Values::F64(raw.iter().map(|&x| x as f64 * -1e-3).collect()),
         ];
         for values in &all {
-            assert_eq!(vertex_order(values), by_comparison(values), "{}", values.type_name());
+            assert_eq!(
+                vertex_order(values),
+                by_comparison(values),
+                "{}",
+                values.type_name()
+            );
         }
     }
 

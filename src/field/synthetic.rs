@@ -37,11 +37,31 @@ struct Blob {
 }
 
 const BLOBS: [Blob; 5] = [
-    Blob { centre: [0.22, 0.25, 0.25], radius: 0.09, height: 1.0 },
-    Blob { centre: [0.30, 0.70, 0.22], radius: 0.06, height: 0.8 },
-    Blob { centre: [0.18, 0.45, 0.70], radius: 0.04, height: 0.65 },
-    Blob { centre: [0.42, 0.30, 0.78], radius: 0.025, height: 0.55 },
-    Blob { centre: [0.40, 0.82, 0.62], radius: 0.05, height: 0.9 },
+    Blob {
+        centre: [0.22, 0.25, 0.25],
+        radius: 0.09,
+        height: 1.0,
+    },
+    Blob {
+        centre: [0.30, 0.70, 0.22],
+        radius: 0.06,
+        height: 0.8,
+    },
+    Blob {
+        centre: [0.18, 0.45, 0.70],
+        radius: 0.04,
+        height: 0.65,
+    },
+    Blob {
+        centre: [0.42, 0.30, 0.78],
+        radius: 0.025,
+        height: 0.55,
+    },
+    Blob {
+        centre: [0.40, 0.82, 0.62],
+        radius: 0.05,
+        height: 0.9,
+    },
 ];
 
 impl Synthetic {
@@ -55,7 +75,11 @@ impl Synthetic {
 
     /// The same scene with noise of amplitude `noise`.
     pub fn with_noise(self, noise: f32, seed: u64) -> Self {
-        Self { noise, seed, ..self }
+        Self {
+            noise,
+            seed,
+            ..self
+        }
     }
 
     /// The value at a point of the unit cube, without noise.
@@ -68,20 +92,34 @@ impl Synthetic {
         }
         // Torus around the z axis through (0.72, 0.28, 0.30).
         let (tx, ty, tz) = (p[0] - 0.72, p[1] - 0.28, p[2] - 0.30);
-        let ring = ((tx * tx + ty * ty).sqrt() - 0.14).hypot(tz);
-        f += 0.85 * (-sq(ring / 0.045)).exp();
+        let rho = (tx * tx + ty * ty).sqrt();
+        let ring = (rho - 0.14).hypot(tz);
+        // Height varies around the ring: a ridge of constant height would be
+        // a degenerate circle of maxima.
+        let around = if rho > 0.0 { tx / rho } else { 0.0 };
+        f += 0.85 * (1.0 + 0.4 * around) * (-sq(ring / 0.06)).exp();
         // Hollow shell of radius 0.16 around (0.70, 0.68, 0.66), with a core.
         let (sx, sy, sz) = (p[0] - 0.70, p[1] - 0.68, p[2] - 0.66);
         let r = (sx * sx + sy * sy + sz * sz).sqrt();
-        f += 0.7 * (-sq((r - 0.16) / 0.035)).exp();
+        let up = if r > 0.0 { sz / r } else { 0.0 };
+        f += 0.7 * (1.0 + 0.5 * up) * (-sq((r - 0.16) / 0.05)).exp();
         f += 0.95 * (-sq(r / 0.05)).exp();
-        f
+        // A faint tilt: far from every feature the bumps underflow to exactly
+        // 0.0, and a plateau would turn into spurious critical points under
+        // simulation of simplicity. The tilt adds none of its own.
+        f + 0.02 * (p[0] + 0.6 * p[1] + 0.3 * p[2])
     }
 
     /// Generates the field (float32 values, unit spacing).
     pub fn generate(&self) -> ScalarField {
         let [nx, ny, nz] = self.dims;
-        let scale = |i: usize, n: usize| if n > 1 { i as f32 / (n - 1) as f32 } else { 0.5 };
+        let scale = |i: usize, n: usize| {
+            if n > 1 {
+                i as f32 / (n - 1) as f32
+            } else {
+                0.5
+            }
+        };
         let mut values = Vec::with_capacity(nx * ny * nz);
         let mut id = 0u64;
         for z in 0..nz {
@@ -98,9 +136,8 @@ impl Synthetic {
         }
         // Finite by construction, dims nonzero and within the limit for any
         // size a caller can allocate.
-        ScalarField::new(self.dims, Values::F32(values)).unwrap_or_else(|e| {
-            panic!("synthetic field of {:?} is invalid: {e}", self.dims)
-        })
+        ScalarField::new(self.dims, Values::F32(values))
+            .unwrap_or_else(|e| panic!("synthetic field of {:?} is invalid: {e}", self.dims))
     }
 }
 

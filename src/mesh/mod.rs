@@ -34,7 +34,12 @@ pub trait Mesh: Sync {
     /// component, not per neighbour: neighbours joined by a link edge were
     /// already united when the later of them was swept. This default visits
     /// every selected neighbour, which is correct, only slower.
-    fn for_each_link_component(&self, v: u32, in_set: impl FnMut(u32) -> bool, mut f: impl FnMut(u32)) {
+    fn for_each_link_component(
+        &self,
+        v: u32,
+        in_set: impl FnMut(u32) -> bool,
+        mut f: impl FnMut(u32),
+    ) {
         let mut in_set = in_set;
         self.for_each_neighbour(v, |u| {
             if in_set(u) {
@@ -248,7 +253,12 @@ impl Mesh for FreudenthalGrid {
     }
 
     #[inline(always)]
-    fn for_each_link_component(&self, v: u32, mut in_set: impl FnMut(u32) -> bool, mut f: impl FnMut(u32)) {
+    fn for_each_link_component(
+        &self,
+        v: u32,
+        mut in_set: impl FnMut(u32) -> bool,
+        mut f: impl FnMut(u32),
+    ) {
         let present = self.present(v);
         let mut mask = 0usize;
         for (i, &o) in self.interior_offsets.iter().enumerate() {
@@ -359,7 +369,14 @@ mod tests {
 
     #[test]
     fn neighbourhood_is_symmetric_and_matches_offsets_everywhere() {
-        for dims in [[3, 4, 5], [1, 3, 4], [3, 1, 4], [2, 2, 2], [5, 1, 1], [1, 1, 1]] {
+        for dims in [
+            [3, 4, 5],
+            [1, 3, 4],
+            [3, 1, 4],
+            [2, 2, 2],
+            [5, 1, 1],
+            [1, 1, 1],
+        ] {
             let g = FreudenthalGrid::new(dims);
             let n = g.num_vertices() as u32;
             for v in 0..n {
@@ -389,11 +406,22 @@ mod tests {
         // induced subgraph (mesh edges among the selected neighbours) once.
         let g = FreudenthalGrid::new([4, 4, 4]);
         let mut seed = 12345u64;
-        for v in [g.vertex(1, 2, 1), g.vertex(0, 0, 0), g.vertex(3, 1, 0), g.vertex(0, 3, 2)] {
+        for v in [
+            g.vertex(1, 2, 1),
+            g.vertex(0, 0, 0),
+            g.vertex(3, 1, 0),
+            g.vertex(0, 3, 2),
+        ] {
             let nb = neighbours(&g, v);
             for _ in 0..300 {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let chosen: Vec<u32> = nb.iter().copied().filter(|&u| (seed >> (u % 60)) & 1 == 1).collect();
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                let chosen: Vec<u32> = nb
+                    .iter()
+                    .copied()
+                    .filter(|&u| (seed >> (u % 60)) & 1 == 1)
+                    .collect();
                 let mut reps = Vec::new();
                 g.for_each_link_component(v, |u| chosen.contains(&u), |u| reps.push(u));
                 // Components of the chosen set under edges u1-u2 that form a

@@ -160,7 +160,10 @@ pub fn augment(merged: Merged, order: &[u32]) -> ContourTree {
         let x_above = next & ABOVE != 0;
         match (is_node(vertex_arc[x]), is_node(vertex_arc[y])) {
             (true, true) => {
-                let (a, b) = (NodeId(vertex_arc[x] & !NODE_FLAG), NodeId(vertex_arc[y] & !NODE_FLAG));
+                let (a, b) = (
+                    NodeId(vertex_arc[x] & !NODE_FLAG),
+                    NodeId(vertex_arc[y] & !NODE_FLAG),
+                );
                 let (upper, lower) = if x_above { (a, b) } else { (b, a) };
                 arcs.push(Superarc { upper, lower });
             }
@@ -170,7 +173,11 @@ pub fn augment(merged: Merged, order: &[u32]) -> ContourTree {
                 vertex_arc[x] = arcs.len() as u32;
                 // The other end is not known yet: a placeholder that the
                 // start pass overwrites.
-                let (upper, lower) = if x_above { (NodeId(u32::MAX), end) } else { (end, NodeId(u32::MAX)) };
+                let (upper, lower) = if x_above {
+                    (NodeId(u32::MAX), end)
+                } else {
+                    (end, NodeId(u32::MAX))
+                };
                 arcs.push(Superarc { upper, lower });
             }
             _ => {}

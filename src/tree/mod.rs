@@ -11,6 +11,7 @@
 //! during the merge and augmentation; the finished tree keeps 8 bytes
 //! (`vertex_arc` and `arc_vertices`) plus O(supernodes).
 
+pub mod json;
 mod merge;
 pub mod sweep;
 
@@ -142,8 +143,7 @@ impl ContourTree {
         let order = field.vertex_order();
         let sort = t.elapsed();
         let mesh = field.mesh();
-        let (tree, mut times) =
-            crate::with_values!(field.values(), v => Self::build(&mesh, v.as_slice(), &order, progress))?;
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build(&mesh, v.as_slice(), &order, progress))?;
         times.sort = sort;
         Ok((tree, times))
     }
@@ -159,7 +159,10 @@ impl ContourTree {
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
         let mut times = BuildTimes::default();
         if order.is_empty() {
-            return Ok((Self::assemble(Vec::new(), Vec::new(), Vec::new(), vec![0], Vec::new()), times));
+            return Ok((
+                Self::assemble(Vec::new(), Vec::new(), Vec::new(), vec![0], Vec::new()),
+                times,
+            ));
         }
         progress.stage("join and split trees");
         let t = Instant::now();

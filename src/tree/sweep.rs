@@ -122,4 +122,3 @@ fn find(uf: &mut [u32], mut x: u32) -> u32 {
         x = gp;
     }
 }
-
