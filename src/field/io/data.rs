@@ -337,9 +337,20 @@ pub fn describe(file: &Path, spec_encoding: Encoding, e: DataError) -> ReadError
     }
 }
 
-/// Reads the values `spec` describes, with every size check, returning the
-/// values and any warnings.
-pub fn read_data(spec: &DataSpec) -> Result<(Values, Vec<String>), ReadError> {
+/// Reads the values `spec` describes for the volume file `header`, with
+/// every size check, returning the values and any warnings. Errors about a
+/// separate data file name both files.
+pub fn read_data(header: &Path, spec: &DataSpec) -> Result<(Values, Vec<String>), ReadError> {
+    read_data_file(spec).map_err(|e| {
+        if e.path() == header {
+            e
+        } else {
+            invalid(header, format!("data file {e}"))
+        }
+    })
+}
+
+fn read_data_file(spec: &DataSpec) -> Result<(Values, Vec<String>), ReadError> {
     let path = spec.file.as_path();
     let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
     if meta.is_dir() {

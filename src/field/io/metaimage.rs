@@ -204,7 +204,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Error,
     };
-    let (values, warnings) = read_data(&spec)?;
+    let (values, warnings) = read_data(path, &spec)?;
     let format = format!(
         "MetaImage ({}, {})",
         if local { ".mha" } else { ".mhd" },

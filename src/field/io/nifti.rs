@@ -183,7 +183,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Warn,
     };
-    let (mut values, warnings) = read_data(&spec)?;
+    let (mut values, warnings) = read_data(path, &spec)?;
     let scaled =
         slope.is_finite() && inter.is_finite() && slope != 0.0 && !(slope == 1.0 && inter == 0.0);
     if scaled {

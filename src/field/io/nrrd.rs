@@ -235,7 +235,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Error,
     };
-    let (values, warnings) = read_data(&spec)?;
+    let (values, warnings) = read_data(path, &spec)?;
     let format = format!(
         "NRRD{} ({})",
         if attached { "" } else { " detached" },

@@ -77,7 +77,7 @@ fn read_layout(
         count: n,
         tail: Tail::Error,
     };
-    let (values, warnings) = read_data(&spec)?;
+    let (values, warnings) = read_data(path, &spec)?;
     let format = format!(
         "raw ({}{})",
         ty.name(),

@@ -211,7 +211,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                     count: n,
                     tail: Tail::Ignore,
                 };
-                let (v, w) = read_data(&spec)?;
+                let (v, w) = read_data(path, &spec)?;
                 (v, w, "appended raw")
             }
         }

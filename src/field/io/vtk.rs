@@ -203,7 +203,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Ignore,
     };
-    let (values, warnings) = read_data(&spec)?;
+    let (values, warnings) = read_data(path, &spec)?;
     let format = format!(
         "VTK legacy ({})",
         if encoding == Encoding::Raw {
