@@ -343,7 +343,7 @@ impl Renderer {
                 positions.len()
             )));
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(invalid(format!(
                 "{} indices is not a whole number of triangles",
                 indices.len()
@@ -970,5 +970,25 @@ fn linear_from_srgb(c: f32) -> f32 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The app keeps the renderer in egui_wgpu's callback resources (a
+    /// type map that needs `Send + Sync`) or behind a lock.
+    #[test]
+    fn renderer_is_send_and_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<Renderer>();
+    }
+
+    #[test]
+    fn srgb_decoding_fixes_the_ends() {
+        assert_eq!(linear_from_srgb(0.0), 0.0);
+        assert!((linear_from_srgb(1.0) - 1.0).abs() < 1e-6);
+        assert!((linear_from_srgb(0.5) - 0.214).abs() < 1e-3);
     }
 }
