@@ -1,1 +1,668 @@
-//! (in progress)
+//! Contour tree simplification (Carr, Snoeyink, van de Panne, §3.3): the
+//! whole pruning sequence, computed once, then any level on demand.
+//!
+//! The sequence starts from the [`CollapsedTree`] (zero-height arcs
+//! contracted, §5) and follows the paper's three rules with a priority
+//! queue and lazy deletion:
+//!
+//! 1. always perform vertex reduction where possible;
+//! 2. always prune the least important leaf: a lower leaf `e` costs up(e),
+//!    an upper leaf down(e) ([`Measure`]);
+//! 3. never prune the last up- or down-arc of an interior node (it is
+//!    discarded from the queue and comes back after a vertex reduction).
+//!
+//! Reducing a node merges its arcs `e1` (above) and `e2` (below) into a new
+//! arc `d` with up(d) = up(e1), down(d) = down(e2). One *step* is one leaf
+//! prune with the reduction it may allow. Arcs are never changed once
+//! made, only created, so the sequence is a list of small diffs and a
+//! [`SimplifiedTree`] moves between levels in time proportional to the
+//! number of steps between them, not to the tree.
+//!
+//! **Chains.** Every arc, at any level, stands for a monotone path of
+//! original superarcs. Reductions form a forest over arc ids (d's children
+//! are e2 and e1); laying its leaves out in order puts the chain of *every*
+//! arc in one contiguous range of a single array, ascending in value:
+//! [`Simplification::chain`] is a slice, and a contour at isovalue `h` on
+//! any arc is found by binary search on it. No arc owns a heap allocation.
+//!
+//! **Memory:** per arc id (at most twice the collapsed arcs) 40 bytes; per
+//! step 16 bytes; per original superarc 4 bytes (the chain array); a
+//! [`SimplifiedTree`] adds 12 bytes per arc id and 16 per node.
+
+pub mod collapse;
+pub mod json;
+
+pub use crate::measure::geometric::Measure;
+pub use collapse::CollapsedTree;
+
+use crate::field::ScalarField;
+use crate::tree::{ArcId, ContourTree};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::sync::Arc;
+
+/// An arc of the simplification: an arc of the collapsed tree (ids below
+/// [`Simplification::base_arcs`]) or one made by vertex reduction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SimpArcId(pub u32);
+
+/// A node of the collapsed tree (nodes are never created by simplification).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SimpNodeId(pub u32);
+
+/// One step of the pruning sequence: a leaf prune, and the vertex
+/// reduction it allowed, if any.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    /// The leaf arc pruned.
+    pub pruned: SimpArcId,
+    /// True when the leaf was a lower leaf (a minimum levelled up to the
+    /// arc's upper node), false for an upper leaf.
+    pub lower_leaf: bool,
+    /// Its cost: up(e) for a lower leaf, down(e) for an upper one.
+    pub cost: f64,
+    /// The arc made by the reduction that followed (its parts are
+    /// [`Simplification::reduced_from`]), if any.
+    pub reduced: Option<SimpArcId>,
+}
+
+/// One point of the simplification curve (paper §5): after some steps, the
+/// tree has `arcs` arcs, and `feature_size` is the highest cost pruned so
+/// far. Plotted log-log.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurvePoint {
+    /// Arcs in the tree.
+    pub arcs: usize,
+    /// Highest cost of any arc pruned to get here (0 for the full tree).
+    pub feature_size: f64,
+}
+
+/// Priority queue entry, ordered by cost then arc id (deterministic ties).
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    cost: f64,
+    arc: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Entry {
+    /// Reversed, so that `BinaryHeap` pops the cheapest.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other
+            .cost
+            .total_cmp(&self.cost)
+            .then(other.arc.cmp(&self.arc))
+    }
+}
+
+const NONE: u32 = u32::MAX;
+
+/// The complete pruning sequence of a collapsed contour tree under one
+/// measure. Immutable once made; share it between threads with `Arc`.
+#[derive(Clone, Debug)]
+pub struct Simplification {
+    measure: Measure,
+    /// Per node: representative vertex and value.
+    node_vertex: Vec<u32>,
+    node_value: Vec<f64>,
+    /// Per arc id: ends, costs.
+    upper: Vec<u32>,
+    lower: Vec<u32>,
+    up_cost: Vec<f64>,
+    down_cost: Vec<f64>,
+    /// Per arc id made by reduction (index `id - base_arcs`): (e1, e2), the
+    /// arcs above and below the reduced node.
+    parts: Vec<(u32, u32)>,
+    /// Per arc id: its chain, `chain[chain_start[a]..][..chain_len[a]]`.
+    chain_start: Vec<u32>,
+    chain_len: Vec<u32>,
+    chain: Vec<ArcId>,
+    steps: Vec<Step>,
+    curve: Vec<CurvePoint>,
+    base_arcs: usize,
+    perturbed_arcs: usize,
+}
+
+impl Simplification {
+    /// Collapses `tree`, measures it and computes the whole pruning
+    /// sequence. The field is read once, for the measures.
+    pub fn new(tree: &ContourTree, field: &ScalarField, measure: Measure) -> Self {
+        Self::from_collapsed(&CollapsedTree::new(tree, field), measure)
+    }
+
+    /// The pruning sequence of an already collapsed tree (switching the
+    /// measure does not need the field again).
+    pub fn from_collapsed(base: &CollapsedTree, measure: Measure) -> Self {
+        let m = base.num_arcs();
+        let n = base.num_nodes();
+        let cap = 2 * m;
+        let mut upper = Vec::with_capacity(cap);
+        let mut lower = Vec::with_capacity(cap);
+        let mut up_cost = Vec::with_capacity(cap);
+        let mut down_cost = Vec::with_capacity(cap);
+        let node_value: Vec<f64> = (0..n as u32).map(|v| base.node_value(v)).collect();
+        let node_vertex: Vec<u32> = (0..n as u32).map(|v| base.node_vertex(v)).collect();
+        for a in 0..m as u32 {
+            let (u, l) = base.arc(a);
+            upper.push(u);
+            lower.push(l);
+            up_cost.push(measure.up_cost(base.below(a), node_value[u as usize]));
+            down_cost.push(measure.down_cost(base.above(a), node_value[l as usize]));
+        }
+        // Live adjacency: counts and the XOR of the live arc ids up and
+        // down; a node with one arc in a direction finds it in O(1).
+        let mut n_up = vec![0u32; n];
+        let mut n_down = vec![0u32; n];
+        let mut x_up = vec![0u32; n];
+        let mut x_down = vec![0u32; n];
+        for a in 0..m {
+            n_up[lower[a] as usize] += 1;
+            x_up[lower[a] as usize] ^= a as u32;
+            n_down[upper[a] as usize] += 1;
+            x_down[upper[a] as usize] ^= a as u32;
+        }
+        let degree = |n_up: &[u32], n_down: &[u32], v: u32| n_up[v as usize] + n_down[v as usize];
+        let mut alive = vec![true; m];
+        let mut parts: Vec<(u32, u32)> = Vec::new();
+        let mut heap = BinaryHeap::with_capacity(m);
+        // The queue holds leaf arcs with the cost of their direction.
+        let enqueue = |heap: &mut BinaryHeap<Entry>,
+                       n_up: &[u32],
+                       n_down: &[u32],
+                       a: u32,
+                       upper: &[u32],
+                       lower: &[u32],
+                       up_cost: &[f64],
+                       down_cost: &[f64]| {
+            let (lo, hi) = (lower[a as usize], upper[a as usize]);
+            let (lo_leaf, hi_leaf) = (degree(n_up, n_down, lo) == 1, degree(n_up, n_down, hi) == 1);
+            if lo_leaf && !hi_leaf {
+                heap.push(Entry {
+                    cost: up_cost[a as usize],
+                    arc: a,
+                });
+            } else if hi_leaf && !lo_leaf {
+                heap.push(Entry {
+                    cost: down_cost[a as usize],
+                    arc: a,
+                });
+            }
+        };
+        for a in 0..m as u32 {
+            enqueue(
+                &mut heap, &n_up, &n_down, a, &upper, &lower, &up_cost, &down_cost,
+            );
+        }
+        let mut steps = Vec::new();
+        while let Some(Entry { cost, arc: a }) = heap.pop() {
+            if !alive[a as usize] {
+                continue; // lazy deletion: reduced away since queued
+            }
+            let (hi, lo) = (upper[a as usize], lower[a as usize]);
+            let lower_leaf = degree(&n_up, &n_down, lo) == 1;
+            let upper_leaf = degree(&n_up, &n_down, hi) == 1;
+            if lower_leaf == upper_leaf {
+                continue; // the last arc of the tree
+            }
+            // Rule 3: never the last arc down (up) of the node it hangs from.
+            let s = if lower_leaf { hi } else { lo };
+            if (lower_leaf && n_down[s as usize] == 1) || (upper_leaf && n_up[s as usize] == 1) {
+                continue;
+            }
+            // Prune.
+            alive[a as usize] = false;
+            n_up[lo as usize] -= 1;
+            x_up[lo as usize] ^= a;
+            n_down[hi as usize] -= 1;
+            x_down[hi as usize] ^= a;
+            let mut reduced = None;
+            if n_up[s as usize] == 1 && n_down[s as usize] == 1 {
+                // Rule 1: vertex reduction.
+                let (e1, e2) = (x_up[s as usize], x_down[s as usize]);
+                let d = upper.len() as u32;
+                let (u, l) = (upper[e1 as usize], lower[e2 as usize]);
+                upper.push(u);
+                lower.push(l);
+                up_cost.push(up_cost[e1 as usize]);
+                down_cost.push(down_cost[e2 as usize]);
+                parts.push((e1, e2));
+                alive[e1 as usize] = false;
+                alive[e2 as usize] = false;
+                alive.push(true);
+                n_up[s as usize] = 0;
+                n_down[s as usize] = 0;
+                x_up[s as usize] = 0;
+                x_down[s as usize] = 0;
+                x_down[u as usize] ^= e1 ^ d;
+                x_up[l as usize] ^= e2 ^ d;
+                enqueue(
+                    &mut heap, &n_up, &n_down, d, &upper, &lower, &up_cost, &down_cost,
+                );
+                reduced = Some(SimpArcId(d));
+            } else if degree(&n_up, &n_down, s) == 1 {
+                // A node with arcs in one direction only (a collapsed
+                // plateau) has become a leaf.
+                let r = x_up[s as usize] ^ x_down[s as usize];
+                enqueue(
+                    &mut heap, &n_up, &n_down, r, &upper, &lower, &up_cost, &down_cost,
+                );
+            }
+            steps.push(Step {
+                pruned: SimpArcId(a),
+                lower_leaf,
+                cost,
+                reduced,
+            });
+        }
+        let mut curve = Vec::with_capacity(steps.len() + 1);
+        let (mut arcs, mut feature) = (m, 0.0f64);
+        curve.push(CurvePoint {
+            arcs,
+            feature_size: feature,
+        });
+        for s in &steps {
+            arcs -= 1 + s.reduced.is_some() as usize;
+            feature = feature.max(s.cost);
+            curve.push(CurvePoint {
+                arcs,
+                feature_size: feature,
+            });
+        }
+        let (chain_start, chain_len, chain) = layout_chains(base, &alive, &parts);
+        Self {
+            measure,
+            node_vertex,
+            node_value,
+            upper,
+            lower,
+            up_cost,
+            down_cost,
+            parts,
+            chain_start,
+            chain_len,
+            chain,
+            steps,
+            curve,
+            base_arcs: m,
+            perturbed_arcs: base.perturbed_arcs(),
+        }
+    }
+
+    /// The measure that ranked the leaves.
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
+    /// Arcs of the collapsed tree (level 0).
+    pub fn base_arcs(&self) -> usize {
+        self.base_arcs
+    }
+
+    /// Superarcs of the perturbed tree the collapsed tree was made from.
+    pub fn perturbed_arcs(&self) -> usize {
+        self.perturbed_arcs
+    }
+
+    /// Number of arc ids (collapsed arcs and arcs made by reduction).
+    pub fn num_arc_ids(&self) -> usize {
+        self.upper.len()
+    }
+
+    /// Number of nodes (of the collapsed tree).
+    pub fn num_nodes(&self) -> usize {
+        self.node_vertex.len()
+    }
+
+    /// The pruning sequence.
+    pub fn steps(&self) -> &[Step] {
+        &self.steps
+    }
+
+    /// The simplification curve: point `k` is the tree after `k` steps.
+    pub fn curve(&self) -> &[CurvePoint] {
+        &self.curve
+    }
+
+    /// Upper node of an arc.
+    pub fn upper(&self, a: SimpArcId) -> SimpNodeId {
+        SimpNodeId(self.upper[a.0 as usize])
+    }
+
+    /// Lower node of an arc.
+    pub fn lower(&self, a: SimpArcId) -> SimpNodeId {
+        SimpNodeId(self.lower[a.0 as usize])
+    }
+
+    /// up(e): the cost of pruning the arc as a lower leaf.
+    pub fn up_cost(&self, a: SimpArcId) -> f64 {
+        self.up_cost[a.0 as usize]
+    }
+
+    /// down(e): the cost of pruning the arc as an upper leaf.
+    pub fn down_cost(&self, a: SimpArcId) -> f64 {
+        self.down_cost[a.0 as usize]
+    }
+
+    /// The two arcs (above, below) a reduced arc was made from, or `None`
+    /// for an arc of the collapsed tree.
+    pub fn reduced_from(&self, a: SimpArcId) -> Option<(SimpArcId, SimpArcId)> {
+        let i = (a.0 as usize).checked_sub(self.base_arcs)?;
+        let (e1, e2) = self.parts[i];
+        Some((SimpArcId(e1), SimpArcId(e2)))
+    }
+
+    /// The original superarcs (of the perturbed tree) an arc stands for: a
+    /// monotone path, ascending in value, so the one holding isovalue `h`
+    /// is found by binary search ([`Simplification::superarc_at`]).
+    pub fn chain(&self, a: SimpArcId) -> &[ArcId] {
+        let s = self.chain_start[a.0 as usize] as usize;
+        &self.chain[s..s + self.chain_len[a.0 as usize] as usize]
+    }
+
+    /// The original superarc of arc `a` whose value range holds `h`:
+    /// binary search on its chain. At a value shared by two superarcs of
+    /// the chain (the plateau between them) the lower one is returned.
+    /// `None` when `h` is outside the arc's range.
+    pub fn superarc_at(
+        &self,
+        a: SimpArcId,
+        h: f64,
+        tree: &ContourTree,
+        field: &ScalarField,
+    ) -> Option<ArcId> {
+        let chain = self.chain(a);
+        let top = |e: ArcId| field.value(tree.node(tree.arc(e).upper).vertex);
+        let bottom = |e: ArcId| field.value(tree.node(tree.arc(e).lower).vertex);
+        let i = chain.partition_point(|&e| top(e) < h);
+        let e = *chain.get(i)?;
+        (bottom(e) <= h).then_some(e)
+    }
+
+    /// The representative mesh vertex of a node.
+    pub fn node_vertex(&self, v: SimpNodeId) -> u32 {
+        self.node_vertex[v.0 as usize]
+    }
+
+    /// The value of a node.
+    pub fn node_value(&self, v: SimpNodeId) -> f64 {
+        self.node_value[v.0 as usize]
+    }
+
+    /// The number of steps that leaves at most `arcs` arcs (all of them
+    /// when even the last level has more).
+    pub fn steps_for_arcs(&self, arcs: usize) -> usize {
+        self.curve
+            .partition_point(|p| p.arcs > arcs)
+            .min(self.steps.len())
+    }
+
+    /// The number of steps that prunes every leaf up to `feature_size`: the
+    /// last level whose feature size does not exceed it.
+    pub fn steps_for_feature_size(&self, feature_size: f64) -> usize {
+        self.curve
+            .partition_point(|p| p.feature_size <= feature_size)
+            .saturating_sub(1)
+    }
+}
+
+/// Lays out the chains of all arc ids in one array so that each is a
+/// contiguous ascending range (see the module documentation).
+fn layout_chains(
+    base: &CollapsedTree,
+    alive: &[bool],
+    parts: &[(u32, u32)],
+) -> (Vec<u32>, Vec<u32>, Vec<ArcId>) {
+    let m = base.num_arcs();
+    let total = alive.len();
+    let mut len = vec![0u32; total];
+    for (a, l) in len.iter_mut().enumerate().take(m) {
+        *l = base.chain(a as u32).len() as u32;
+    }
+    let mut has_parent = vec![false; total];
+    for (i, &(e1, e2)) in parts.iter().enumerate() {
+        len[m + i] = len[e1 as usize] + len[e2 as usize];
+        has_parent[e1 as usize] = true;
+        has_parent[e2 as usize] = true;
+    }
+    let mut start = vec![NONE; total];
+    let mut next = 0u32;
+    for a in 0..total {
+        if !has_parent[a] {
+            start[a] = next;
+            next += len[a];
+        }
+    }
+    // Parents have higher ids than their parts: go down from the top.
+    for i in (0..parts.len()).rev() {
+        let (e1, e2) = parts[i];
+        let s = start[m + i];
+        start[e2 as usize] = s;
+        start[e1 as usize] = s + len[e2 as usize];
+    }
+    let mut chain = vec![ArcId(0); next as usize];
+    for a in 0..m {
+        let s = start[a] as usize;
+        let c = base.chain(a as u32);
+        chain[s..s + c.len()].copy_from_slice(c);
+    }
+    (start, len, chain)
+}
+
+/// One level of a [`Simplification`], the view the explorer draws: the
+/// live arcs and nodes after some number of steps. Moving to another level
+/// replays or undoes the steps in between (O(change)); reading costs
+/// nothing beyond the live arcs.
+#[derive(Clone, Debug)]
+pub struct SimplifiedTree {
+    sim: Arc<Simplification>,
+    step: usize,
+    /// Live arcs, densely, in no particular order, and each arc id's
+    /// position there (`NONE` when not live).
+    live_arcs: Vec<u32>,
+    arc_pos: Vec<u32>,
+    /// Per node: live arcs (up, down); live nodes densely and positions.
+    degree: Vec<(u32, u32)>,
+    live_nodes: Vec<u32>,
+    node_pos: Vec<u32>,
+}
+
+/// A live arc of a [`SimplifiedTree`], as the explorer reads it.
+#[derive(Clone, Copy, Debug)]
+pub struct LevelArc<'a> {
+    /// The arc.
+    pub id: SimpArcId,
+    /// Its upper node.
+    pub upper: SimpNodeId,
+    /// Its lower node.
+    pub lower: SimpNodeId,
+    /// Mesh vertex of the upper node.
+    pub upper_vertex: u32,
+    /// Mesh vertex of the lower node.
+    pub lower_vertex: u32,
+    /// up(e).
+    pub up_cost: f64,
+    /// down(e).
+    pub down_cost: f64,
+    /// The original superarcs it stands for, ascending.
+    pub chain: &'a [ArcId],
+}
+
+impl SimplifiedTree {
+    /// The unsimplified (collapsed) tree, level 0.
+    pub fn new(sim: Arc<Simplification>) -> Self {
+        let ids = sim.num_arc_ids();
+        let n = sim.num_nodes();
+        let mut t = Self {
+            live_arcs: Vec::with_capacity(sim.base_arcs),
+            arc_pos: vec![NONE; ids],
+            degree: vec![(0, 0); n],
+            live_nodes: Vec::with_capacity(n),
+            node_pos: vec![NONE; n],
+            step: 0,
+            sim,
+        };
+        for a in 0..t.sim.base_arcs as u32 {
+            t.insert(a);
+        }
+        t
+    }
+
+    /// The simplification this is a level of.
+    pub fn simplification(&self) -> &Arc<Simplification> {
+        &self.sim
+    }
+
+    /// Steps applied (0 = the collapsed tree).
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    /// Number of live arcs.
+    pub fn num_arcs(&self) -> usize {
+        self.live_arcs.len()
+    }
+
+    /// Number of live nodes.
+    pub fn num_nodes(&self) -> usize {
+        self.live_nodes.len()
+    }
+
+    /// The feature size of this level: the highest cost pruned to reach it.
+    pub fn feature_size(&self) -> f64 {
+        self.sim.curve[self.step].feature_size
+    }
+
+    /// Moves to the level after `step` steps (clamped to the last).
+    pub fn set_step(&mut self, step: usize) {
+        let step = step.min(self.sim.steps.len());
+        while self.step < step {
+            let s = self.sim.steps[self.step];
+            self.remove(s.pruned.0);
+            if let Some(d) = s.reduced {
+                let (e1, e2) = self.sim.parts[d.0 as usize - self.sim.base_arcs];
+                self.remove(e1);
+                self.remove(e2);
+                self.insert(d.0);
+            }
+            self.step += 1;
+        }
+        while self.step > step {
+            self.step -= 1;
+            let s = self.sim.steps[self.step];
+            if let Some(d) = s.reduced {
+                let (e1, e2) = self.sim.parts[d.0 as usize - self.sim.base_arcs];
+                self.remove(d.0);
+                self.insert(e1);
+                self.insert(e2);
+            }
+            self.insert(s.pruned.0);
+        }
+    }
+
+    /// Moves to the simplest level with at most `arcs` arcs (the last level
+    /// when none has so few).
+    pub fn set_level(&mut self, arcs: usize) {
+        let s = self.sim.steps_for_arcs(arcs);
+        self.set_step(s);
+    }
+
+    /// Moves to the level that prunes every leaf whose cost is at most
+    /// `feature_size` (the last level of the curve at or below it).
+    pub fn set_feature_size(&mut self, feature_size: f64) {
+        let s = self.sim.steps_for_feature_size(feature_size);
+        self.set_step(s);
+    }
+
+    /// The live arcs, in no particular order (sort by id for determinism).
+    pub fn arcs(&self) -> impl ExactSizeIterator<Item = LevelArc<'_>> + '_ {
+        self.live_arcs.iter().map(|&a| self.arc(SimpArcId(a)))
+    }
+
+    /// The live arc ids, in no particular order.
+    pub fn arc_ids(&self) -> &[u32] {
+        &self.live_arcs
+    }
+
+    /// The live nodes, in no particular order.
+    pub fn node_ids(&self) -> &[u32] {
+        &self.live_nodes
+    }
+
+    /// True when the arc is live at this level.
+    pub fn is_live(&self, a: SimpArcId) -> bool {
+        self.arc_pos[a.0 as usize] != NONE
+    }
+
+    /// Any arc (live or not) by id.
+    pub fn arc(&self, a: SimpArcId) -> LevelArc<'_> {
+        let s = &self.sim;
+        let (u, l) = (s.upper(a), s.lower(a));
+        LevelArc {
+            id: a,
+            upper: u,
+            lower: l,
+            upper_vertex: s.node_vertex(u),
+            lower_vertex: s.node_vertex(l),
+            up_cost: s.up_cost(a),
+            down_cost: s.down_cost(a),
+            chain: s.chain(a),
+        }
+    }
+
+    /// Live arcs (up, down) at a node; (0, 0) when the node is gone.
+    pub fn degree(&self, v: SimpNodeId) -> (u32, u32) {
+        self.degree[v.0 as usize]
+    }
+
+    fn insert(&mut self, a: u32) {
+        self.arc_pos[a as usize] = self.live_arcs.len() as u32;
+        self.live_arcs.push(a);
+        let (u, l) = (self.sim.upper[a as usize], self.sim.lower[a as usize]);
+        self.degree[u as usize].1 += 1;
+        self.node_touched(u);
+        self.degree[l as usize].0 += 1;
+        self.node_touched(l);
+    }
+
+    fn remove(&mut self, a: u32) {
+        let p = self.arc_pos[a as usize];
+        debug_assert_ne!(p, NONE, "removing a dead arc");
+        self.live_arcs.swap_remove(p as usize);
+        if let Some(&moved) = self.live_arcs.get(p as usize) {
+            self.arc_pos[moved as usize] = p;
+        }
+        self.arc_pos[a as usize] = NONE;
+        let (u, l) = (self.sim.upper[a as usize], self.sim.lower[a as usize]);
+        self.degree[u as usize].1 -= 1;
+        self.node_touched(u);
+        self.degree[l as usize].0 -= 1;
+        self.node_touched(l);
+    }
+
+    /// Keeps the live node list in step with the node's degree.
+    fn node_touched(&mut self, v: u32) {
+        let (up, down) = self.degree[v as usize];
+        let live = up + down > 0;
+        let p = self.node_pos[v as usize];
+        if live && p == NONE {
+            self.node_pos[v as usize] = self.live_nodes.len() as u32;
+            self.live_nodes.push(v);
+        } else if !live && p != NONE {
+            self.live_nodes.swap_remove(p as usize);
+            if let Some(&moved) = self.live_nodes.get(p as usize) {
+                self.node_pos[moved as usize] = p;
+            }
+            self.node_pos[v as usize] = NONE;
+        }
+    }
+}
