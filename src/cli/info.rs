@@ -60,8 +60,8 @@ pub fn report(volume: &Volume, bins: usize) -> String {
     if stored == file_type {
         let _ = writeln!(
             out,
-            "type:      {stored} ({} bytes per value)",
-            v.bytes_per_value()
+            "type:      {stored} ({} per value)",
+            bytes(v.bytes_per_value())
         );
     } else {
         let _ = writeln!(

@@ -31,7 +31,7 @@ pub struct InputArgs {
     #[arg(value_name = "INPUT", default_value = "synthetic")]
     pub input: String,
     /// Dimensions of a raw file: X,Y,Z (or X,Y for an image).
-    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 2..=3)]
+    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',')]
     pub dims: Option<Vec<usize>>,
     /// Scalar type of a raw file: uint8 int8 uint16 int16 uint32 int32
     /// uint64 int64 float32 float64 (NRRD aliases too).

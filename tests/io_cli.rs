@@ -1,0 +1,131 @@
+//! The input options every subcommand shares, and `flexiso info`.
+#![allow(clippy::unwrap_used)]
+
+mod io_common;
+use io_common::*;
+
+use clap::Parser;
+use flexiso::cli::input::{Endian, InputArgs, default_input};
+use flexiso::field::io::NanPolicy;
+use std::process::Command;
+
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    input: InputArgs,
+}
+
+fn parse(args: &[&str]) -> InputArgs {
+    Cli::try_parse_from(std::iter::once("flexiso").chain(args.iter().copied()))
+        .unwrap()
+        .input
+}
+
+#[test]
+fn input_args_parse_raw_layout_and_nan_policy() {
+    let a = parse(&[
+        "vol.bin", "--dims", "3,4,5", "--type", "uint16", "--endian", "big", "--nan", "max",
+    ]);
+    assert_eq!(a.input, "vol.bin");
+    assert_eq!(a.dims, Some(vec![3, 4, 5]));
+    assert_eq!(a.endian, Endian::Big);
+    assert_eq!(a.nan, NanPolicy::Max);
+    let raw = a.read_options().unwrap().raw.unwrap();
+    assert_eq!(raw.dims, [3, 4, 5]);
+    assert!(raw.big_endian);
+    assert_eq!(parse(&[]), default_input());
+    assert!(parse(&["x.raw", "--dims", "3,4,5"]).read_options().is_err());
+    assert!(
+        parse(&["x.raw", "--dims", "3,4,5", "--type", "cplx"])
+            .read_options()
+            .is_err()
+    );
+}
+
+#[test]
+fn synthetic_inputs_load_the_built_in_field() {
+    let v = InputArgs::from_input("synthetic:6x7x8").load().unwrap();
+    assert_eq!(v.field.dims(), [6, 7, 8]);
+    let clean = InputArgs::from_input("synthetic:8").load().unwrap();
+    let noisy = InputArgs::from_input("synthetic-noisy:8").load().unwrap();
+    assert_ne!(clean.field.values(), noisy.field.values());
+    assert!(InputArgs::from_input("synthetic:2000").load().is_err()); // 8e9 vertices
+}
+
+#[test]
+fn raw_file_loads_through_input_args() {
+    let dir = tempfile::tempdir().unwrap();
+    let vals = reference("int16", 60);
+    let p = write(dir.path(), "v.dat", &encode(&vals, "int16", true));
+    let a = parse(&[
+        p.to_str().unwrap(),
+        "--dims",
+        "3,4,5",
+        "--type",
+        "short",
+        "--endian",
+        "big",
+    ]);
+    assert_eq!(as_f64(a.load().unwrap().field.values()), vals);
+}
+
+fn flexiso(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_flexiso"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn info_prints_format_dims_type_range_histogram_and_memory() {
+    let (code, out, err) = flexiso(&["info", &format!("{DATA}/neghip.nrrd")]);
+    assert_eq!(code, 0, "{err}");
+    for want in [
+        "format:    NRRD (gzip)",
+        "dims:      64 x 64 x 64 = 262144 vertices",
+        "type:      uint8 (1 byte per value)",
+        "spacing:   1 x 1 x 1",
+        "range:     0 .. 255",
+        "distinct:  256 values",
+        "histogram: 10 bins",
+        "26 bytes per vertex",
+        "about 6.8 MiB",
+    ] {
+        assert!(out.contains(want), "missing '{want}' in\n{out}");
+    }
+    let bars = out.lines().filter(|l| l.starts_with("  [")).count();
+    assert_eq!(bars, 10);
+    let (code, out, _) = flexiso(&["info", "synthetic:8", "--bins", "4"]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("float32") && !out.contains("distinct"),
+        "{out}"
+    );
+    assert_eq!(out.lines().filter(|l| l.starts_with("  [")).count(), 4);
+}
+
+#[test]
+fn info_on_bad_input_exits_2_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "bad.nrrd",
+        b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n123",
+    );
+    let (code, out, err) = flexiso(&["info", p.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("bad.nrrd") && err.contains("truncated"),
+        "{err}"
+    );
+    let (code, _, err) = flexiso(&["info", "/nonexistent/volume.nrrd"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("No such file"), "{err}");
+}
