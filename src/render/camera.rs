@@ -3,9 +3,11 @@
 //! World up is **+Z** (volumes are usually stacked slices along z). The eye
 //! sits on a sphere of radius `distance` around `target`:
 //! `eye = target + distance * (cos pitch cos yaw, cos pitch sin yaw, sin pitch)`.
-//! The projection is right-handed perspective with depth in `[0, 1]` (wgpu's
-//! convention); near and far planes follow the distance and the size of the
-//! scene given to [`Camera::fit`], so zooming never clips the scene.
+//! The projection is right-handed perspective with **reversed depth**: 1 at
+//! the near plane, 0 at the far one (wgpu's `[0, 1]` range; with a float
+//! depth buffer this keeps precision even when zoomed in far, see the
+//! renderer's depth test). Near and far planes follow the distance and the
+//! size of the scene given to [`Camera::fit`], so zooming never clips it.
 
 use glam::{Mat4, Vec2, Vec3};
 
@@ -130,7 +132,8 @@ impl Camera {
         Mat4::look_at_rh(self.eye(), self.target, up)
     }
 
-    /// The world-to-clip matrix for a viewport of `aspect` = width / height.
+    /// The world-to-clip matrix for a viewport of `aspect` = width / height
+    /// (reversed depth: near → 1, far → 0).
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let aspect = if aspect.is_finite() && aspect > 0.0 {
             aspect
@@ -138,18 +141,18 @@ impl Camera {
             1.0
         };
         let (near, far) = self.near_far();
-        Mat4::perspective_rh(self.fov_y, aspect, near, far) * self.view()
+        // Swapping near and far reverses depth.
+        Mat4::perspective_rh(self.fov_y, aspect, far, near) * self.view()
     }
 
     /// The picking ray through normalized device coordinates `ndc` (x right,
     /// y up, both in `[-1, 1]`): the eye and a unit direction.
     pub fn ray(&self, ndc: [f32; 2], aspect: f32) -> (Vec3, Vec3) {
         let inv = self.view_proj(aspect).inverse();
-        let ndc = Vec2::from(ndc);
-        let near = inv.project_point3(ndc.extend(0.0));
-        let far = inv.project_point3(ndc.extend(1.0));
+        // Any point between the clip planes on that pixel gives the direction.
+        let p = inv.project_point3(Vec2::from(ndc).extend(0.5));
         let eye = self.eye();
-        (eye, (far - near).normalize_or(self.target - eye))
+        (eye, (p - eye).normalize_or(self.target - eye))
     }
 }
 

@@ -42,7 +42,9 @@
 //!   space. The output texture is [`COLOUR_FORMAT`] (`Rgba8Unorm`) holding
 //!   sRGB-encoded bytes: what egui samples from a native texture and what
 //!   a PNG stores, so both show the same colours.
-//! - World up is +Z; see [`Camera`].
+//! - World up is +Z; see [`Camera`]. Depth is reversed (near = 1, cleared
+//!   to 0, `GreaterEqual` test) in a `Depth32Float` buffer, so zooming in
+//!   close does not cost depth precision.
 //! - Opaque meshes (alpha = 1) are drawn first with depth writes; then the
 //!   bounding box; then transparent meshes back to front by the distance of
 //!   their box centre from the eye, depth-tested but not depth-writing.
