@@ -23,15 +23,21 @@ pub(crate) struct CpuMesh {
     pub indices: Vec<u32>,
     /// Axis-aligned bounding box (min, max); inverted (min > max) when empty.
     pub bbox: (Vec3, Vec3),
+    /// Whether counter-clockwise triangles face outwards: the signed volume
+    /// enclosed is positive. Exact for closed meshes, a majority vote for
+    /// open ones; decides the draw order of a transparent mesh's halves.
+    pub ccw_outward: bool,
 }
 
 impl CpuMesh {
     /// Copies a mesh whose indices have been checked against `positions`.
     pub fn new(positions: &[[f32; 3]], indices: &[u32]) -> Self {
+        let bbox = bbox_of(positions, indices);
         CpuMesh {
             positions: positions.to_vec(),
             indices: indices.to_vec(),
-            bbox: bbox_of(positions, indices),
+            bbox,
+            ccw_outward: signed_volume(positions, indices, bbox) >= 0.0,
         }
     }
 
@@ -64,6 +70,24 @@ impl CpuMesh {
         };
         best.map(|t| (t, origin + t * dir))
     }
+}
+
+/// Six times the signed volume enclosed by the triangles (divergence
+/// theorem), measured from the box centre to keep the sums small.
+fn signed_volume(positions: &[[f32; 3]], indices: &[u32], bbox: (Vec3, Vec3)) -> f64 {
+    let o = if bbox.0.cmple(bbox.1).all() {
+        0.5 * (bbox.0 + bbox.1)
+    } else {
+        Vec3::ZERO
+    };
+    indices
+        .chunks_exact(3)
+        .map(|t| {
+            let p = |k: usize| (Vec3::from(positions[t[k] as usize]) - o).as_dvec3();
+            p(0).dot(p(1).cross(p(2)))
+        })
+        .filter(|v| v.is_finite())
+        .sum()
 }
 
 /// The bounding box of the vertices used by the triangles (inverted when
@@ -248,6 +272,16 @@ mod tests {
             m.ray_hit(Vec3::new(2.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0))
                 .is_none()
         );
+    }
+
+    #[test]
+    fn winding_orientation_is_detected() {
+        let (p, _, mut i) = icosphere([5.0, 0.0, 0.0], 1.0, 1);
+        assert!(CpuMesh::new(&p, &i).ccw_outward);
+        for t in i.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        assert!(!CpuMesh::new(&p, &i).ccw_outward);
     }
 
     #[test]

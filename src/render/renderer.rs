@@ -112,7 +112,10 @@ pub struct Renderer {
     sample_count: u32,
     style_layout: wgpu::BindGroupLayout,
     opaque: wgpu::RenderPipeline,
-    transparent: wgpu::RenderPipeline,
+    /// Transparent meshes, drawn twice: triangles facing away on screen
+    /// (cull front), then those facing the viewer (cull back).
+    transparent_back: wgpu::RenderPipeline,
+    transparent_front: wgpu::RenderPipeline,
     lines: wgpu::RenderPipeline,
     frame_buffer: wgpu::Buffer,
     frame_bind: wgpu::BindGroup,
@@ -214,7 +217,10 @@ impl Renderer {
             mask: !0,
             alpha_to_coverage_enabled: false,
         };
-        let mesh_pipeline = |label, depth_write: bool, blend: Option<wgpu::BlendState>| {
+        let mesh_pipeline = |label,
+                             depth_write: bool,
+                             blend: Option<wgpu::BlendState>,
+                             cull_mode: Option<wgpu::Face>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&mesh_layout),
@@ -230,8 +236,7 @@ impl Renderer {
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
-                    // Contours are open or closed and seen from both sides.
-                    cull_mode: None,
+                    cull_mode,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
@@ -256,10 +261,23 @@ impl Renderer {
                 cache: None,
             })
         };
-        let opaque = mesh_pipeline("flexiso opaque meshes", true, None);
+        // Opaque: no culling, contours are open or closed and seen from
+        // both sides.
+        let opaque = mesh_pipeline("flexiso opaque meshes", true, None, None);
         // Transparent meshes test depth against the opaque ones but do not
         // write it, so all transparent layers blend.
-        let transparent = mesh_pipeline("flexiso transparent meshes", false, Some(blend));
+        let transparent_back = mesh_pipeline(
+            "flexiso transparent meshes, far side",
+            false,
+            Some(blend),
+            Some(wgpu::Face::Front),
+        );
+        let transparent_front = mesh_pipeline(
+            "flexiso transparent meshes, near side",
+            false,
+            Some(blend),
+            Some(wgpu::Face::Back),
+        );
         let lines = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("flexiso bounds"),
             layout: Some(&lines_layout),
@@ -303,7 +321,8 @@ impl Renderer {
             sample_count,
             style_layout,
             opaque,
-            transparent,
+            transparent_back,
+            transparent_front,
             lines,
             frame_buffer,
             frame_bind,
@@ -685,8 +704,18 @@ impl Renderer {
             pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..24, 0, 0..1);
         }
-        pass.set_pipeline(&self.transparent);
+        // Within a closed mesh, its far half is drawn before its near half:
+        // with counter-clockwise-outward winding (`ccw_outward`) the far half
+        // is what faces away on screen, otherwise the reverse.
         for (_, _, m) in transparent {
+            let (first, second) = if m.cpu.ccw_outward {
+                (&self.transparent_back, &self.transparent_front)
+            } else {
+                (&self.transparent_front, &self.transparent_back)
+            };
+            pass.set_pipeline(first);
+            draw(&mut pass, m);
+            pass.set_pipeline(second);
             draw(&mut pass, m);
         }
     }
