@@ -501,6 +501,7 @@ fn read_data_file(spec: &DataSpec) -> Result<(Values, Vec<String>), ReadError> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 

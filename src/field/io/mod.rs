@@ -603,6 +603,7 @@ pub(crate) fn read_prefix(r: &mut impl Read, len: usize) -> std::io::Result<Vec<
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 

@@ -147,7 +147,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let spacing = [f32_at(80) as f64, f32_at(84) as f64, f32_at(88) as f64];
     let vox_offset = f32_at(108);
     let (slope, inter) = (f32_at(112), f32_at(116));
-    if !(vox_offset.is_finite() && vox_offset >= 0.0 && vox_offset <= 1e12) {
+    if !(0.0..=1e12).contains(&vox_offset) {
         return Err(invalid(path, format!("bad vox_offset {vox_offset}")));
     }
     let vox_offset = vox_offset as u64;

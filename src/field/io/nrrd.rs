@@ -57,10 +57,10 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        if let Some(k) = line.find(":=") {
-            if !line[..k].contains(": ") {
-                continue; // key/value pair
-            }
+        if let Some(k) = line.find(":=")
+            && !line[..k].contains(": ")
+        {
+            continue; // key/value pair
         }
         let Some((field, value)) = line.split_once(':') else {
             return Err(invalid(

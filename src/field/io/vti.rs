@@ -291,12 +291,12 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
                 }
             }
             ("Piece", false) => {
-                if let (Some(p), Some(w)) = (tag.attr("Extent"), extent) {
-                    if parse_extent(path, p)? != w {
-                        return Err(bad(
-                            "pieces smaller than the WholeExtent are not supported".into()
-                        ));
-                    }
+                if let (Some(p), Some(w)) = (tag.attr("Extent"), extent)
+                    && parse_extent(path, p)? != w
+                {
+                    return Err(bad(
+                        "pieces smaller than the WholeExtent are not supported".into()
+                    ));
                 }
             }
             ("PointData", false) => {
