@@ -254,3 +254,88 @@ fn malformed_meshes_are_refused_and_empty_ones_draw_nothing() {
     assert!(r.remove_mesh(2));
     assert!(!r.set_style(2, [1.0; 4], true, false));
 }
+
+/// A torus around the z axis: `(positions, normals, indices)`, outward
+/// normals, counter-clockwise outward winding.
+fn torus(
+    centre: Vec3,
+    major: f32,
+    minor: f32,
+    n: u32,
+    m: u32,
+) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u32>) {
+    let (mut p, mut nn, mut idx) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let u = i as f32 / n as f32 * std::f32::consts::TAU;
+        for j in 0..m {
+            let v = j as f32 / m as f32 * std::f32::consts::TAU;
+            let normal = Vec3::new(u.cos() * v.cos(), u.sin() * v.cos(), v.sin());
+            let ring = Vec3::new(u.cos(), u.sin(), 0.0) * major;
+            p.push((centre + ring + minor * normal).to_array());
+            nn.push(normal.to_array());
+            let (i1, j1) = ((i + 1) % n, (j + 1) % m);
+            let (a, b, c, d) = (i * m + j, i1 * m + j, i1 * m + j1, i * m + j1);
+            idx.extend([a, b, c, a, c, d]);
+        }
+    }
+    (p, nn, idx)
+}
+
+/// A scene with self-occlusion (a torus), nesting (a transparent shell
+/// around a core) and the volume box: checks depth where the torus hides
+/// its own far side, and saves the picture for a person to look at.
+#[test]
+fn torus_hides_its_far_side_and_shell_shows_its_core() {
+    let Some(gpu) = gpu() else { return };
+    let (tp, tn, ti) = torus(Vec3::new(0.3, 0.3, 0.3), 0.2, 0.07, 64, 24);
+    let (cp, cn, ci) = icosphere([0.72, 0.7, 0.65], 0.06, 3);
+    let (sp, sn, si) = icosphere([0.72, 0.7, 0.65], 0.16, 4);
+    let mut r = gpu.renderer();
+    r.set_mesh(&gpu.device, &gpu.queue, 1, &tp, &tn, &ti)
+        .expect("torus");
+    r.set_mesh(&gpu.device, &gpu.queue, 2, &cp, &cn, &ci)
+        .expect("core");
+    r.set_mesh(&gpu.device, &gpu.queue, 3, &sp, &sn, &si)
+        .expect("shell");
+    r.set_style(1, [0.89, 0.45, 0.20, 1.0], true, false);
+    r.set_style(2, [0.85, 0.2, 0.3, 1.0], true, false);
+    r.set_style(3, [0.3, 0.6, 0.85, 0.35], true, false);
+    r.set_bounds([0.0; 3], [1.0; 3]);
+    let mut camera = Camera::default();
+    camera.fit([0.0; 3], [1.0; 3]);
+    let (w, h) = (480, 360);
+    r.render(&gpu.device, &gpu.queue, &camera, w, h);
+    let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    save("scene.png", &img);
+
+    let vp = Renderer::view_proj(&camera, w as f32, h as f32);
+    let to_px = |p: Vec3| {
+        let q = vp.project_point3(p);
+        (
+            ((q.x + 1.0) * 0.5 * w as f32) as u32,
+            ((1.0 - q.y) * 0.5 * h as f32) as u32,
+        )
+    };
+    // The core shows through the shell: reddish at its centre.
+    let (x, y) = to_px(Vec3::new(0.72, 0.7, 0.65));
+    let c = img.get_pixel(x, y).0;
+    assert!(c[0] > c[2], "core through the shell: {c:?}");
+    // Picking at the core's pixel hits the shell first (it is drawn and
+    // pickable though transparent).
+    let (id, _) = r
+        .pick(&camera, w as f32, h as f32, x as f32 + 0.5, y as f32 + 0.5)
+        .expect("pick");
+    assert_eq!(id, 3);
+    // The torus hole is background (or box lines), its ring is orange, and
+    // the pick on the ring's near side lands on the near side.
+    let eye = camera.eye();
+    let ring_near = Vec3::new(0.3, 0.1, 0.3 + 0.07);
+    let (x, y) = to_px(ring_near);
+    let o = img.get_pixel(x, y).0;
+    assert!(o[0] > o[2] + 60, "torus ring: {o:?}");
+    let (id, pos) = r
+        .pick(&camera, w as f32, h as f32, x as f32 + 0.5, y as f32 + 0.5)
+        .expect("pick torus");
+    assert_eq!(id, 1);
+    assert!((Vec3::from(pos) - eye).length() <= (ring_near - eye).length() + 0.05);
+}
