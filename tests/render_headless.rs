@@ -186,6 +186,7 @@ fn transparency_bounds_highlight_and_resize() {
     r.set_bounds([-2.0; 3], [2.0; 3]);
     let (w, h) = (200, 160);
     r.render(&gpu.device, &gpu.queue, &camera, w, h);
+    assert!(r.is_current(&camera, w, h));
     let g0 = r.target_generation();
     let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
     save("transparent.png", &img);
@@ -206,6 +207,10 @@ fn transparency_bounds_highlight_and_resize() {
 
     // Highlight: rim pixels change.
     r.set_style(10, [0.9, 0.1, 0.1, 1.0], true, true);
+    assert!(
+        !r.is_current(&camera, w, h),
+        "a style change needs a render"
+    );
     r.render(&gpu.device, &gpu.queue, &camera, w, h);
     let hi = r.read_image(&gpu.device, &gpu.queue).expect("read");
     save("highlight.png", &hi);
@@ -217,6 +222,7 @@ fn transparency_bounds_highlight_and_resize() {
         .count();
     assert!(changed > 200, "highlight changed {changed} pixels");
 
+    assert!(!r.is_current(&camera, 120, 90), "a resize needs a render");
     r.render(&gpu.device, &gpu.queue, &camera, 120, 90);
     assert_ne!(r.target_generation(), g0);
     assert_eq!(r.target_size(), Some((120, 90)));

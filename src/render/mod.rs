@@ -23,7 +23,8 @@
 //! message instead of the view):
 //! ```text
 //! let size_px = (rect.size() * ui.pixels_per_point()).round();
-//! renderer.render(&rs.device, &rs.queue, &camera, size_px.x as u32, size_px.y as u32);
+//! let (w, h) = (size_px.x as u32, size_px.y as u32);
+//! if !renderer.is_current(&camera, w, h) { renderer.render(&rs.device, &rs.queue, &camera, w, h); }
 //! let id = tex.update(&mut rs.renderer.write(), &rs.device, &renderer);
 //! if let Some(id) = id { ui.put(rect, egui::Image::new((id, rect.size()))); }
 //! ```

@@ -123,6 +123,10 @@ pub struct Renderer {
     bounds: Option<BoundsLines>,
     target: Option<Target>,
     generation: u64,
+    /// Bumped by every change to what is drawn.
+    scene_version: u64,
+    /// What the last render showed: camera, size, scene version.
+    last_render: Option<(Camera, (u32, u32), u64)>,
     background: [f32; 4],
 }
 
@@ -330,6 +334,8 @@ impl Renderer {
             bounds: None,
             target: None,
             generation: 0,
+            scene_version: 0,
+            last_render: None,
             background: DEFAULT_BACKGROUND,
         }
     }
@@ -443,6 +449,7 @@ impl Renderer {
         entry.index_count = indices.len() as u32;
         entry.cpu = CpuMesh::new(positions, indices);
         self.meshes.insert(id, entry);
+        self.scene_version += 1;
         Ok(())
     }
 
@@ -466,11 +473,13 @@ impl Renderer {
 
     /// Removes mesh `id` (and its GPU buffers); false if there was none.
     pub fn remove_mesh(&mut self, id: u64) -> bool {
+        self.scene_version += 1;
         self.meshes.remove(&id).is_some()
     }
 
     /// Removes every mesh.
     pub fn clear_meshes(&mut self) {
+        self.scene_version += 1;
         self.meshes.clear();
     }
 
@@ -512,6 +521,7 @@ impl Renderer {
         if mesh.style != style {
             mesh.style = style;
             mesh.style_dirty = true;
+            self.scene_version += 1;
         }
         true
     }
@@ -541,6 +551,7 @@ impl Renderer {
         {
             return;
         }
+        self.scene_version += 1;
         self.bounds = Some(BoundsLines {
             min,
             max,
@@ -550,13 +561,17 @@ impl Renderer {
 
     /// Stops drawing the bounding box.
     pub fn clear_bounds(&mut self) {
+        self.scene_version += 1;
         self.bounds = None;
     }
 
     /// Sets the background (sRGB, `[0, 1]`; alpha is written as given, keep
     /// it 1 for egui).
     pub fn set_background(&mut self, colour: [f32; 4]) {
-        self.background = colour;
+        if self.background != colour {
+            self.background = colour;
+            self.scene_version += 1;
+        }
     }
 
     /// Renders the scene from `camera` into the renderer's own
@@ -598,6 +613,7 @@ impl Renderer {
             return;
         };
         let (w, h) = target.size;
+        self.last_render = Some((*camera, (w, h), self.scene_version));
         let aspect = w as f32 / h as f32;
         let eye = camera.eye();
         // The fill light comes from above-left-behind the viewer, in world
@@ -732,6 +748,20 @@ impl Renderer {
             Some(t) => t,
             None => unreachable!("the target was just created"),
         }
+    }
+
+    /// Whether the texture already shows this camera at this size with
+    /// nothing changed since: the app may then skip [`Renderer::render`]
+    /// (software rendering makes every skipped frame count).
+    pub fn is_current(&self, camera: &Camera, width: u32, height: u32) -> bool {
+        self.last_render.is_some_and(|(c, size, version)| {
+            c == *camera
+                && version == self.scene_version
+                && self
+                    .target
+                    .as_ref()
+                    .is_some_and(|t| t.size == size && size == (width.max(1), height.max(1)))
+        })
     }
 
     /// The colour texture of the last render, if any.
