@@ -97,6 +97,22 @@ fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         b64(&le)
     );
     out.push(("a.vti", vti.into_bytes()));
+    // UInt64 headers, big-endian, one base64 run, appended uncompressed.
+    let head64 = "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"BigEndian\" header_type=\"UInt64\"";
+    let mut joined = 48u64.to_be_bytes().to_vec();
+    joined.extend_from_slice(&be);
+    let vti = format!(
+        "{head64}{body}<DataArray type=\"Int16\" Name=\"v\" format=\"binary\">{}</DataArray></PointData></Piece></ImageData></VTKFile>",
+        b64(&joined)
+    );
+    out.push(("c.vti", vti.into_bytes()));
+    let mut vti = format!(
+        "{head64}{body}<DataArray type=\"Int16\" Name=\"v\" format=\"appended\" offset=\"0\"/></PointData></Piece></ImageData><AppendedData encoding=\"raw\">_"
+    )
+    .into_bytes();
+    vti.extend_from_slice(&joined);
+    vti.extend_from_slice(b"</AppendedData></VTKFile>");
+    out.push(("d.vti", vti));
     let comp = zlib(&le);
     let mut app = Vec::new();
     for w in [1u32, 48, 48, comp.len() as u32] {
@@ -202,7 +218,7 @@ proptest! {
 
     #[test]
     fn mutated_files_never_panic(
-        seed in 0usize..15,
+        seed in 0usize..17,
         muts in proptest::collection::vec(mutation(), 1..6),
         header_bias in proptest::bool::weighted(0.8),
     ) {
@@ -234,5 +250,8 @@ proptest! {
 
 /// Cases per property: 768, or `IO_FUZZ_CASES` for a longer hunt.
 fn fuzz_cases() -> u32 {
-    std::env::var("IO_FUZZ_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(768)
+    std::env::var("IO_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(768)
 }

@@ -254,7 +254,7 @@ pub fn parse_ascii(
             };
             v.push(
                 t.parse()
-                    .map_err(|_| DataError::BadNumber(t.chars().take(40).collect()))?,
+                    .map_err(|_| DataError::BadNumber(super::nrrd::clip(t)))?,
             );
         }
         Ok(v)

@@ -248,9 +248,17 @@ fn is_magic(line: &str) -> bool {
     line.len() == 8 && line.starts_with("NRRD000") && line.as_bytes()[7].is_ascii_digit()
 }
 
-/// At most 60 characters of user text, for messages.
+/// At most 60 characters of user text, control characters escaped, so
+/// that messages stay on one line.
 pub(crate) fn clip(s: &str) -> String {
-    let mut out: String = s.chars().take(60).collect();
+    let mut out = String::new();
+    for c in s.chars().take(60) {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
     if s.chars().count() > 60 {
         out.push('…');
     }
@@ -273,7 +281,12 @@ struct Header {
 
 impl Header {
     fn set(&mut self, path: &Path, field: &str, value: &str) -> Result<(), ReadError> {
-        let bad = |what: &str| invalid(path, format!("bad '{field}': {what} '{}'", clip(value)));
+        let bad = |what: &str| {
+            invalid(
+                path,
+                format!("bad '{}': {what} '{}'", clip(field), clip(value)),
+            )
+        };
         match field {
             "dimension" => self.dimension = Some(value.parse().map_err(|_| bad("not a number"))?),
             "sizes" => {

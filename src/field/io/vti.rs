@@ -89,16 +89,24 @@ fn next_tag(buf: &[u8], mut from: usize) -> Result<Option<Tag>, String> {
         while !s.is_empty() {
             let eq = s
                 .find('=')
-                .ok_or_else(|| format!("attribute without value in <{name}>"))?;
+                .ok_or_else(|| format!("attribute without value in <{}>", clip(&name)))?;
             let key = s[..eq].trim().to_owned();
             let after = s[eq + 1..].trim_start();
             let quote = after.chars().next().filter(|c| *c == '"' || *c == '\'');
             let Some(q) = quote else {
-                return Err(format!("unquoted attribute '{key}' in <{name}>"));
+                return Err(format!(
+                    "unquoted attribute '{}' in <{}>",
+                    clip(&key),
+                    clip(&name)
+                ));
             };
-            let close = after[1..]
-                .find(q)
-                .ok_or_else(|| format!("unterminated attribute '{key}' in <{name}>"))?;
+            let close = after[1..].find(q).ok_or_else(|| {
+                format!(
+                    "unterminated attribute '{}' in <{}>",
+                    clip(&key),
+                    clip(&name)
+                )
+            })?;
             attrs.push((key, after[1..1 + close].to_owned()));
             s = after[close + 2..].trim_start();
         }
@@ -508,6 +516,9 @@ fn decode_inline(
         .get(..enc_len(first))
         .ok_or_else(|| invalid(path, "base64 data truncated: no header"))?;
     let head = b64(path, head_text)?;
+    if head.len() < hw {
+        return Err(invalid(path, "base64 data truncated: no header"));
+    }
     let header_len = if zlib {
         let nblocks = word(&head[..hw], be);
         let len = nblocks
