@@ -522,3 +522,28 @@ fn single_vertex_and_tiny_grids() {
     check_against_oracles(&grid([2, 1, 1], vec![3, 3]));
     check_against_oracles(&grid([2, 2, 2], vec![1, 0, 0, 1, 0, 1, 1, 0]));
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    /// The engine's general path (an explicit mesh: every neighbour looked
+    /// up, no link table) gives the same tree as the grid's fast path.
+    #[test]
+    fn explicit_edge_list_mesh_gives_the_same_tree(field in random_grid()) {
+        let grid = field.mesh();
+        let mut edges = Vec::new();
+        for v in 0..field.len() as u32 {
+            grid.for_each_neighbour(v, |u| if u > v { edges.push((v, u)) });
+        }
+        let explicit = flexiso::mesh::EdgeListMesh::new(field.len(), &edges);
+        let order = field.vertex_order();
+        let Values::U8(values) = field.values() else { unreachable!("u8 grid") };
+        let (general, _) = ContourTree::build(&explicit, values.as_slice(), &order, &Progress::new()).expect("not cancelled");
+        let fast = build(&field);
+        prop_assert_eq!(general.nodes(), fast.nodes());
+        prop_assert_eq!(general.arcs(), fast.arcs());
+        for a in 0..fast.arcs().len() as u32 {
+            prop_assert_eq!(general.arc_vertices(ArcId(a)), fast.arc_vertices(ArcId(a)));
+        }
+    }
+}

@@ -1,8 +1,11 @@
-//! `flexiso tree INPUT [--json PATH]`: the contour tree of a volume, its
-//! statistics and the time of each stage; optionally the tree as JSON.
+//! `flexiso tree INPUT [--json PATH] [--measure M] [--simplify N |
+//! --feature-size X]`: the contour tree of a volume, its statistics and the
+//! time of each stage; the size after collapsing zero-height arcs;
+//! optionally a simplified level; optionally all of it as JSON.
 
 use super::input::InputArgs;
 use crate::progress::Progress;
+use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
 use anyhow::Context;
 use std::path::PathBuf;
@@ -17,6 +20,15 @@ pub struct Args {
     /// Write the tree as JSON to this file ("-" for standard output).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
+    /// Local geometric measure that ranks leaves for simplification.
+    #[arg(long, value_enum, default_value_t = Measure::Hypervolume)]
+    pub measure: Measure,
+    /// Simplify to at most N arcs (counted on the collapsed tree).
+    #[arg(long, value_name = "N", conflicts_with = "feature_size")]
+    pub simplify: Option<usize>,
+    /// Simplify by pruning every leaf whose cost is at most X.
+    #[arg(long, value_name = "X")]
+    pub feature_size: Option<f64>,
 }
 
 /// Runs `flexiso tree`.
@@ -46,6 +58,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     println!("split saddles:  {splits}");
     println!("supernodes:     {}", tree.nodes().len());
     println!("superarcs:      {}", tree.arcs().len());
+    let t = Instant::now();
+    let collapsed = CollapsedTree::new(&tree, field);
+    let collapse = t.elapsed();
+    println!(
+        "collapsed arcs: {} (zero-height arcs contracted)",
+        collapsed.num_arcs()
+    );
+    let level = if args.simplify.is_some() || args.feature_size.is_some() {
+        let t = Instant::now();
+        let sim = Simplification::from_collapsed(&collapsed, args.measure);
+        let sequence = t.elapsed();
+        let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
+        if let Some(n) = args.simplify {
+            level.set_level(n);
+        } else if let Some(x) = args.feature_size {
+            level.set_feature_size(x);
+        }
+        println!(
+            "simplified:     {} arcs by {} (feature size {}, {} of {} steps; measures and collapse {:.3} s, pruning sequence {:.3} s)",
+            level.num_arcs(),
+            args.measure,
+            level.feature_size(),
+            level.step(),
+            level.simplification().steps().len(),
+            collapse.as_secs_f64(),
+            sequence.as_secs_f64(),
+        );
+        Some(level)
+    } else {
+        None
+    };
     let s = |d: std::time::Duration| d.as_secs_f64();
     println!(
         "time (s):       load {:.3}  sort {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
@@ -59,7 +102,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         s(times.total()),
     );
     if let Some(path) = &args.json {
-        let json = crate::tree::json::tree_json(&tree, field);
+        let mut json = crate::tree::json::tree_json(&tree, field);
+        if let Some(obj) = json.as_object_mut() {
+            obj.insert(
+                "collapsed".into(),
+                crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
+            );
+            if let Some(level) = &level {
+                obj.insert(
+                    "simplified".into(),
+                    crate::simplify::json::simplified_tree_json(level, &tree),
+                );
+            }
+        }
         let text = serde_json::to_string(&json)?;
         if path.as_os_str() == "-" {
             println!("{text}");

@@ -28,6 +28,23 @@ pub trait Mesh: Sync {
     #[inline(always)]
     fn prefetch_star<T>(&self, _v: u32, _data: &[T]) {}
 
+    /// A summary of v's upper link (low nibble: the neighbours `above`
+    /// selects) and lower link (high nibble: the others), each
+    /// [`LINK_EMPTY`], [`LINK_SEVERAL`] (two or more components, or a mesh
+    /// that does not summarise), or the index of a neighbour in the single
+    /// component, to be resolved with [`Mesh::neighbour_at`]. The default
+    /// always says [`LINK_SEVERAL`], which sends the sweeps down their
+    /// general path.
+    #[inline(always)]
+    fn link_code(&self, _v: u32, _above: impl FnMut(u32) -> bool) -> u8 {
+        LINK_SEVERAL | LINK_SEVERAL << 4
+    }
+
+    /// The neighbour of `v` named by a [`Mesh::link_code`] index.
+    fn neighbour_at(&self, v: u32, _index: u8) -> u32 {
+        v
+    }
+
     /// Calls `f` with one neighbour of `v` from each connected component of
     /// the part of v's link made of the neighbours `in_set` selects (the
     /// upper or lower link). The sweeps need one union-find lookup per
@@ -48,6 +65,11 @@ pub trait Mesh: Sync {
         });
     }
 }
+
+/// [`Mesh::link_code`]: no neighbour of the link part.
+pub const LINK_EMPTY: u8 = 14;
+/// [`Mesh::link_code`]: several components (or not summarised).
+pub const LINK_SEVERAL: u8 = 15;
 
 /// The 7 positive Freudenthal edge offsets (dx, dy, dz); their negatives are
 /// the other 7.
@@ -228,6 +250,31 @@ impl FreudenthalGrid {
 impl Mesh for FreudenthalGrid {
     fn num_vertices(&self) -> usize {
         self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    #[inline(always)]
+    fn link_code(&self, v: u32, mut above: impl FnMut(u32) -> bool) -> u8 {
+        let present = self.present(v);
+        let mut up = 0u32;
+        for (i, &o) in self.interior_offsets.iter().enumerate() {
+            if present & (1 << i) != 0 && above((v as i64 + o) as u32) {
+                up |= 1 << i;
+            }
+        }
+        let code = |mask: u32| {
+            let entry = self.link.entries[mask as usize];
+            match entry & 0xf {
+                0 => LINK_EMPTY,
+                1 => ((entry >> 4) & 0xf) as u8,
+                _ => LINK_SEVERAL,
+            }
+        };
+        code(up) | code(present & !up) << 4
+    }
+
+    #[inline(always)]
+    fn neighbour_at(&self, v: u32, index: u8) -> u32 {
+        (v as i64 + self.interior_offsets[index as usize]) as u32
     }
 
     #[inline(always)]

@@ -113,11 +113,13 @@ pub struct ContourTree {
 pub struct BuildTimes {
     /// Sorting the vertices.
     pub sort: Duration,
+    /// Classifying every vertex's link (part of `sweeps`).
+    pub links: Duration,
     /// Join tree sweep (in parallel with the split sweep).
     pub join: Duration,
     /// Split tree sweep.
     pub split: Duration,
-    /// Both sweeps, wall clock.
+    /// Link classification and both sweeps, wall clock.
     pub sweeps: Duration,
     /// Merging into the contour tree.
     pub merge: Duration,
@@ -166,17 +168,21 @@ impl ContourTree {
         }
         progress.stage("join and split trees");
         let t = Instant::now();
+        let codes = sweep::link_codes(mesh, values);
+        times.links = t.elapsed();
         let (join, split) = rayon::join(
             || {
                 let t = Instant::now();
-                sweep::sweep(mesh, values, true, order, progress).map(|s| (s, t.elapsed()))
+                sweep::sweep(mesh, values, &codes, true, order, progress).map(|s| (s, t.elapsed()))
             },
             || {
                 let t = Instant::now();
-                sweep::sweep(mesh, values, false, order, &Progress::new()).map(|s| (s, t.elapsed()))
+                sweep::sweep(mesh, values, &codes, false, order, &Progress::new())
+                    .map(|s| (s, t.elapsed()))
             },
         );
         let ((join, tj), (split, ts)) = (join?, split?);
+        drop(codes);
         progress.check(0, 1)?;
         times.join = tj;
         times.split = ts;

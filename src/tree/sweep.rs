@@ -14,8 +14,9 @@
 //! rank, 4 of parent, 1 of degree.
 
 use crate::field::VertexOrder;
-use crate::mesh::Mesh;
+use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
 use crate::progress::{Cancelled, Progress};
+use rayon::prelude::*;
 
 /// No vertex.
 pub const NONE: u32 = u32::MAX;
@@ -42,6 +43,7 @@ const ROOT: u32 = 1 << 31;
 pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
+    link_codes: &[u8],
     join: bool,
     order: &[u32],
     progress: &Progress,
@@ -66,18 +68,29 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
         let v = at(i);
         if i + AHEAD < n {
             let w = at(i + AHEAD);
-            values.prefetch(mesh, w);
             mesh.prefetch_star(w, &uf);
+            if i + 2 * AHEAD < n {
+                let w2 = at(i + 2 * AHEAD) as usize;
+                prefetch(link_codes, w2);
+            }
         }
+        let code = link_codes[v as usize];
+        let code = if join { code & 0xf } else { code >> 4 };
         let mut root = v;
         uf[v as usize] = ROOT | v;
         let mut merged = 0u8;
-        // One representative per component of the visited part of v's link.
+        // One representative per component of the swept part of v's link.
         reps.clear();
-        if join {
-            mesh.for_each_link_component(v, |u| values.above(u, v), |u| reps.push(u));
-        } else {
-            mesh.for_each_link_component(v, |u| values.above(v, u), |u| reps.push(u));
+        match code {
+            LINK_EMPTY => {}
+            LINK_SEVERAL => {
+                if join {
+                    mesh.for_each_link_component(v, |u| values.above(u, v), |u| reps.push(u));
+                } else {
+                    mesh.for_each_link_component(v, |u| values.above(v, u), |u| reps.push(u));
+                }
+            }
+            index => reps.push(mesh.neighbour_at(v, index)),
         }
         for &u in &reps {
             let r = find(&mut uf, u);
@@ -89,6 +102,14 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             let last = uf[r as usize] & !ROOT;
             parent[last as usize] = v;
             merged += 1;
+            if root == v {
+                // v is still a singleton: hang it under r. Its rank is 0, so
+                // r's rank stays a valid bound on height without reading it.
+                uf[v as usize] = r;
+                uf[r as usize] = ROOT | v;
+                root = r;
+                continue;
+            }
             let (hi, lo) = if rank[r as usize] > rank[root as usize] {
                 (r, root)
             } else {
@@ -121,4 +142,41 @@ fn find(uf: &mut [u32], mut x: u32) -> u32 {
         uf[x as usize] = gp;
         x = gp;
     }
+}
+
+#[inline(always)]
+fn prefetch<T>(data: &[T], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if i < data.len() {
+        // SAFETY: a prefetch never faults; the address is inside `data`.
+        unsafe {
+            std::arch::x86_64::_mm_prefetch(
+                data.as_ptr().add(i) as *const i8,
+                std::arch::x86_64::_MM_HINT_T0,
+            )
+        };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (data, i);
+}
+
+/// Summaries of every vertex's upper link (low nibble) and lower link (high
+/// nibble), see [`Mesh::link_code`]. Computed in id order, where the stars
+/// of consecutive vertices overlap in cache, and in parallel; the sweeps,
+/// which visit vertices in value order, then read one byte per vertex
+/// instead of the values of all its neighbours.
+pub fn link_codes<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> Vec<u8> {
+    let n = mesh.num_vertices();
+    let mut codes = vec![0u8; n];
+    codes
+        .par_chunks_mut(1 << 16)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let base = (c << 16) as u32;
+            for (i, code) in chunk.iter_mut().enumerate() {
+                let v = base + i as u32;
+                *code = mesh.link_code(v, |u| values.above(u, v));
+            }
+        });
+    codes
 }
