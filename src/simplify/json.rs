@@ -17,7 +17,7 @@
 //! feature size, the simplest level that has it (the corners of the
 //! staircase), from the full tree to the last level.
 
-use super::{CollapsedTree, SimpArcId, SimpNodeId, SimplifiedTree};
+use super::{CollapsedTree, SimpArcId, SimplifiedTree};
 use crate::tree::{ArcId, ContourTree};
 use serde_json::{Value, json};
 
@@ -64,12 +64,10 @@ pub fn collapsed_tree_json(collapsed: &CollapsedTree, tree: &ContourTree) -> Val
 /// One level of a simplification as JSON, with the simplification curve.
 pub fn simplified_tree_json(level: &SimplifiedTree, tree: &ContourTree) -> Value {
     let sim = level.simplification();
-    let mut node_ids = level.node_ids().to_vec();
-    node_ids.sort_unstable();
-    let nodes: Vec<Value> = node_ids
-        .iter()
-        .map(|&v| {
-            let v = SimpNodeId(v);
+    let nodes: Vec<Value> = level
+        .nodes()
+        .into_iter()
+        .map(|v| {
             let (up, down) = level.degree(v);
             json!({
                 "vertex": sim.node_vertex(v),

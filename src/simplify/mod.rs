@@ -26,8 +26,9 @@
 //! any arc is found by binary search on it. No arc owns a heap allocation.
 //!
 //! **Memory:** per arc id (at most twice the collapsed arcs) 40 bytes; per
-//! step 16 bytes; per original superarc 4 bytes (the chain array); a
-//! [`SimplifiedTree`] adds 12 bytes per arc id and 16 per node.
+//! step 52 bytes (the step and its diff); per original superarc 4 bytes (the chain array); a
+//! [`SimplifiedTree`] adds 8 bytes per arc id and 8 per node; the
+//! steps are also kept as 28-byte diffs for the level view.
 
 pub mod collapse;
 pub mod json;
@@ -107,6 +108,22 @@ impl Ord for Entry {
 
 const NONE: u32 = u32::MAX;
 
+/// A step as the level view replays it: every id it touches, in one
+/// record, so moving the slider reads the steps sequentially.
+#[derive(Clone, Copy, Debug)]
+struct StepDiff {
+    pruned: u32,
+    /// Ends of the pruned arc.
+    upper: u32,
+    lower: u32,
+    /// The arc made by reduction (`NONE` if none), its parts above and
+    /// below, and the node reduced.
+    made: u32,
+    e1: u32,
+    e2: u32,
+    reduced: u32,
+}
+
 /// The complete pruning sequence of a collapsed contour tree under one
 /// measure. Immutable once made; share it between threads with `Arc`.
 #[derive(Clone, Debug)]
@@ -128,6 +145,7 @@ pub struct Simplification {
     chain_len: Vec<u32>,
     chain: Vec<ArcId>,
     steps: Vec<Step>,
+    diffs: Vec<StepDiff>,
     curve: Vec<CurvePoint>,
     base_arcs: usize,
     perturbed_arcs: usize,
@@ -278,6 +296,28 @@ impl Simplification {
                 feature_size: feature,
             });
         }
+        let diffs = steps
+            .iter()
+            .map(|s| {
+                let p = s.pruned.0 as usize;
+                let (made, e1, e2, reduced) = match s.reduced {
+                    Some(d) => {
+                        let (e1, e2) = parts[d.0 as usize - m];
+                        (d.0, e1, e2, lower[e1 as usize])
+                    }
+                    None => (NONE, NONE, NONE, NONE),
+                };
+                StepDiff {
+                    pruned: s.pruned.0,
+                    upper: upper[p],
+                    lower: lower[p],
+                    made,
+                    e1,
+                    e2,
+                    reduced,
+                }
+            })
+            .collect();
         let (chain_start, chain_len, chain) = layout_chains(base, &alive, &parts);
         Self {
             measure,
@@ -292,6 +332,7 @@ impl Simplification {
             chain_len,
             chain,
             steps,
+            diffs,
             curve,
             base_arcs: m,
             perturbed_arcs: base.perturbed_arcs(),
@@ -459,9 +500,9 @@ fn layout_chains(
 }
 
 /// One level of a [`Simplification`], the view the explorer draws: the
-/// live arcs and nodes after some number of steps. Moving to another level
-/// replays or undoes the steps in between (O(change)); reading costs
-/// nothing beyond the live arcs.
+/// live arcs after some number of steps. Moving to another level replays or
+/// undoes the steps in between, a few array writes each (O(change));
+/// reading costs nothing beyond the live arcs.
 #[derive(Clone, Debug)]
 pub struct SimplifiedTree {
     sim: Arc<Simplification>,
@@ -470,10 +511,8 @@ pub struct SimplifiedTree {
     /// position there (`NONE` when not live).
     live_arcs: Vec<u32>,
     arc_pos: Vec<u32>,
-    /// Per node: live arcs (up, down); live nodes densely and positions.
+    /// Per node: live arcs (up, down).
     degree: Vec<(u32, u32)>,
-    live_nodes: Vec<u32>,
-    node_pos: Vec<u32>,
 }
 
 /// A live arc of a [`SimplifiedTree`], as the explorer reads it.
@@ -502,19 +541,23 @@ impl SimplifiedTree {
     pub fn new(sim: Arc<Simplification>) -> Self {
         let ids = sim.num_arc_ids();
         let n = sim.num_nodes();
-        let mut t = Self {
-            live_arcs: Vec::with_capacity(sim.base_arcs),
-            arc_pos: vec![NONE; ids],
-            degree: vec![(0, 0); n],
-            live_nodes: Vec::with_capacity(n),
-            node_pos: vec![NONE; n],
+        let m = sim.base_arcs;
+        let mut degree = vec![(0, 0); n];
+        for a in 0..m {
+            degree[sim.upper[a] as usize].1 += 1;
+            degree[sim.lower[a] as usize].0 += 1;
+        }
+        let mut arc_pos = vec![NONE; ids];
+        for (a, p) in arc_pos.iter_mut().enumerate().take(m) {
+            *p = a as u32;
+        }
+        Self {
+            live_arcs: (0..m as u32).collect(),
+            arc_pos,
+            degree,
             step: 0,
             sim,
-        };
-        for a in 0..t.sim.base_arcs as u32 {
-            t.insert(a);
         }
-        t
     }
 
     /// The simplification this is a level of.
@@ -532,11 +575,6 @@ impl SimplifiedTree {
         self.live_arcs.len()
     }
 
-    /// Number of live nodes.
-    pub fn num_nodes(&self) -> usize {
-        self.live_nodes.len()
-    }
-
     /// The feature size of this level: the highest cost pruned to reach it.
     pub fn feature_size(&self) -> f64 {
         self.sim.curve[self.step].feature_size
@@ -545,27 +583,33 @@ impl SimplifiedTree {
     /// Moves to the level after `step` steps (clamped to the last).
     pub fn set_step(&mut self, step: usize) {
         let step = step.min(self.sim.steps.len());
+        let sim = Arc::clone(&self.sim);
         while self.step < step {
-            let s = self.sim.steps[self.step];
-            self.remove(s.pruned.0);
-            if let Some(d) = s.reduced {
-                let (e1, e2) = self.sim.parts[d.0 as usize - self.sim.base_arcs];
-                self.remove(e1);
-                self.remove(e2);
-                self.insert(d.0);
+            let d = sim.diffs[self.step];
+            // Prune: the leaf and its node lose the arc.
+            self.remove(d.pruned);
+            self.degree[d.upper as usize].1 -= 1;
+            self.degree[d.lower as usize].0 -= 1;
+            if d.made != NONE {
+                // Reduction: the made arc takes e1's place at the node
+                // above and e2's below, so only the reduced node changes.
+                self.replace(d.e1, d.made);
+                self.remove(d.e2);
+                self.degree[d.reduced as usize] = (0, 0);
             }
             self.step += 1;
         }
         while self.step > step {
             self.step -= 1;
-            let s = self.sim.steps[self.step];
-            if let Some(d) = s.reduced {
-                let (e1, e2) = self.sim.parts[d.0 as usize - self.sim.base_arcs];
-                self.remove(d.0);
-                self.insert(e1);
-                self.insert(e2);
+            let d = sim.diffs[self.step];
+            if d.made != NONE {
+                self.replace(d.made, d.e1);
+                self.insert(d.e2);
+                self.degree[d.reduced as usize] = (1, 1);
             }
-            self.insert(s.pruned.0);
+            self.insert(d.pruned);
+            self.degree[d.upper as usize].1 += 1;
+            self.degree[d.lower as usize].0 += 1;
         }
     }
 
@@ -593,9 +637,17 @@ impl SimplifiedTree {
         &self.live_arcs
     }
 
-    /// The live nodes, in no particular order.
-    pub fn node_ids(&self) -> &[u32] {
-        &self.live_nodes
+    /// The live nodes (the ends of live arcs), sorted; O(a log a) for a
+    /// live arcs, computed on each call.
+    pub fn nodes(&self) -> Vec<SimpNodeId> {
+        let mut v: Vec<u32> = self
+            .live_arcs
+            .iter()
+            .flat_map(|&a| [self.sim.upper[a as usize], self.sim.lower[a as usize]])
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v.into_iter().map(SimpNodeId).collect()
     }
 
     /// True when the arc is live at this level.
@@ -627,11 +679,6 @@ impl SimplifiedTree {
     fn insert(&mut self, a: u32) {
         self.arc_pos[a as usize] = self.live_arcs.len() as u32;
         self.live_arcs.push(a);
-        let (u, l) = (self.sim.upper[a as usize], self.sim.lower[a as usize]);
-        self.degree[u as usize].1 += 1;
-        self.node_touched(u);
-        self.degree[l as usize].0 += 1;
-        self.node_touched(l);
     }
 
     fn remove(&mut self, a: u32) {
@@ -642,27 +689,14 @@ impl SimplifiedTree {
             self.arc_pos[moved as usize] = p;
         }
         self.arc_pos[a as usize] = NONE;
-        let (u, l) = (self.sim.upper[a as usize], self.sim.lower[a as usize]);
-        self.degree[u as usize].1 -= 1;
-        self.node_touched(u);
-        self.degree[l as usize].0 -= 1;
-        self.node_touched(l);
     }
 
-    /// Keeps the live node list in step with the node's degree.
-    fn node_touched(&mut self, v: u32) {
-        let (up, down) = self.degree[v as usize];
-        let live = up + down > 0;
-        let p = self.node_pos[v as usize];
-        if live && p == NONE {
-            self.node_pos[v as usize] = self.live_nodes.len() as u32;
-            self.live_nodes.push(v);
-        } else if !live && p != NONE {
-            self.live_nodes.swap_remove(p as usize);
-            if let Some(&moved) = self.live_nodes.get(p as usize) {
-                self.node_pos[moved as usize] = p;
-            }
-            self.node_pos[v as usize] = NONE;
-        }
+    /// Puts arc `new` in the slot of live arc `old`.
+    fn replace(&mut self, old: u32, new: u32) {
+        let p = self.arc_pos[old as usize];
+        debug_assert_ne!(p, NONE, "replacing a dead arc");
+        self.live_arcs[p as usize] = new;
+        self.arc_pos[new as usize] = p;
+        self.arc_pos[old as usize] = NONE;
     }
 }
