@@ -12,6 +12,7 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 
 use super::input::InputArgs;
+use crate::contour::{self, Isovalue};
 use crate::render::{Camera, HeadlessMesh};
 use crate::tree::{ArcId, ContourTree};
 
@@ -176,19 +177,36 @@ fn find_arc(tree: &ContourTree, upper: u32, lower: u32) -> anyhow::Result<ArcId>
 
 /// The contour of one arc at `h`.
 fn arc_contour(
-    _field: &crate::field::ScalarField,
-    _tree: &ContourTree,
-    _arc: ArcId,
-    _h: f64,
+    field: &crate::field::ScalarField,
+    tree: &ContourTree,
+    arc: ArcId,
+    h: f64,
 ) -> anyhow::Result<Vec<Surface>> {
-    bail!("contour extraction is not available yet")
+    let iso = Isovalue::new(h);
+    let seed = contour::path_seed(tree, field, arc, iso).with_context(|| {
+        format!("the arc has no contour at h = {h} (it spans h only strictly inside its range)")
+    })?;
+    let mesh = contour::ContourFollower::new(field).follow(&seed, iso);
+    Ok(vec![surface(mesh)])
 }
 
-/// Every contour at `h`.
+/// Every contour at `h`, one per spanning superarc, by arc id.
 fn all_contours(
-    _field: &crate::field::ScalarField,
-    _tree: &ContourTree,
-    _h: f64,
+    field: &crate::field::ScalarField,
+    tree: &ContourTree,
+    h: f64,
 ) -> anyhow::Result<Vec<Surface>> {
-    bail!("contour extraction is not available yet")
+    Ok(contour::all_contours(tree, field, Isovalue::new(h))
+        .into_iter()
+        .filter(|m| !m.indices.is_empty())
+        .map(surface)
+        .collect())
+}
+
+fn surface(m: contour::ContourMesh) -> Surface {
+    Surface {
+        positions: m.positions,
+        normals: m.normals,
+        indices: m.indices,
+    }
 }
