@@ -2,13 +2,15 @@
 //! synthetic scene (noisy, 96^3 float32) and, when the shared data folder is
 //! there, neghip and hydrogen_atom (uint8 scans).
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
 use criterion::{Criterion, criterion_group, criterion_main};
 use flexiso::field::ScalarField;
 use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::field::synthetic::Synthetic;
 use flexiso::progress::Progress;
 use flexiso::tree::ContourTree;
-use flexiso::tree::sweep::sweep;
+use flexiso::tree::sweep::{link_codes, sweep};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -34,8 +36,14 @@ fn stages(c: &mut Criterion) {
         let order = field.vertex_order();
         let mesh = field.mesh();
         flexiso::with_values!(field.values(), v => {
+            g.bench_function("link codes", |b| {
+                b.iter(|| black_box(link_codes(&mesh, v.as_slice())))
+            });
+            let codes = link_codes(&mesh, v.as_slice());
             g.bench_function("join sweep", |b| {
-                b.iter(|| black_box(sweep(&mesh, v.as_slice(), true, &order, &Progress::new())))
+                b.iter(|| {
+                    black_box(sweep(&mesh, v.as_slice(), &codes, true, &order, &Progress::new()))
+                })
             });
         });
         g.bench_function("tree (all stages)", |b| {

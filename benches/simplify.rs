@@ -6,6 +6,9 @@
 //!
 //! `cargo bench --bench simplify`
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use flexiso::field::ScalarField;
 use flexiso::field::io::{ReadOptions, read_volume};

@@ -166,7 +166,7 @@ fn dims_that_overflow_or_exceed_the_engine_limit_are_refused_before_allocation()
         matches!(
             e,
             ReadError::Field {
-                source: FieldError::TooLarge(_),
+                error: FieldError::TooLarge(_),
                 ..
             }
         ),
@@ -178,7 +178,7 @@ fn dims_that_overflow_or_exceed_the_engine_limit_are_refused_before_allocation()
         matches!(
             e,
             ReadError::Field {
-                source: FieldError::TooLarge(_),
+                error: FieldError::TooLarge(_),
                 ..
             }
         ),
@@ -452,7 +452,7 @@ fn nan_and_infinity_are_refused_or_replaced() {
         matches!(
             e,
             ReadError::Field {
-                source: FieldError::NonFinite {
+                error: FieldError::NonFinite {
                     count: 3,
                     first: 1,
                     x: 1,

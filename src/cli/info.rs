@@ -34,6 +34,9 @@ fn bytes(k: usize) -> String {
 }
 
 fn mib(bytes: u64) -> String {
+    if bytes < 100 << 10 {
+        return format!("{:.1} KiB", bytes as f64 / 1024.0);
+    }
     let m = bytes as f64 / (1u64 << 20) as f64;
     if m >= 10.0 {
         format!("{m:.0} MiB")
@@ -73,8 +76,10 @@ pub fn report(volume: &Volume, bins: usize) -> String {
     let _ = writeln!(out, "spacing:   {sx} x {sy} x {sz}");
     let _ = writeln!(out, "range:     {lo} .. {hi}");
     if let Some(d) = distinct(v) {
-        let _ = writeln!(out, "distinct:  {d} values");
+        let _ = writeln!(out, "distinct:  {d} value{}", if d == 1 { "" } else { "s" });
     }
+    // Constant data: one bin says it all.
+    let bins = if hi > lo { bins } else { 1 };
     let counts = histogram(v, lo, hi, bins);
     let _ = writeln!(out, "histogram: {bins} bins");
     let peak = counts.iter().copied().max().unwrap_or(1).max(1);

@@ -312,8 +312,8 @@ mod tests {
     /// A 1D field: 0 3 1 4 2 -> minima 0,1,2 at x=0,2,4, maxima at 1,3.
     #[test]
     fn regions_of_a_zigzag_are_the_pieces_beyond_each_cut() {
-        let field = ScalarField::new([5, 1, 1], Values::U8(vec![0, 3, 1, 4, 2])).unwrap();
-        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).unwrap();
+        let field = ScalarField::new([5, 1, 1], Values::U8(vec![0, 3, 1, 4, 2])).expect("field");
+        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("tree");
         let r = ArcRegions::new(&tree, &field);
         for (i, arc) in tree.arcs().iter().enumerate() {
             let (b, a) = (r.below(ArcId(i as u32)), r.above(ArcId(i as u32)));

@@ -491,8 +491,8 @@ fn layout_chains(
         start[e1 as usize] = s + len[e2 as usize];
     }
     let mut chain = vec![ArcId(0); next as usize];
-    for a in 0..m {
-        let s = start[a] as usize;
+    for (a, &s) in start.iter().enumerate().take(m) {
+        let s = s as usize;
         let c = base.chain(a as u32);
         chain[s..s + c.len()].copy_from_slice(c);
     }

@@ -89,7 +89,7 @@ pub fn merge(
     let mut cut = 0usize;
     while let Some(x) = leaves.pop() {
         cut += 1;
-        if cut % (1 << 20) == 0 {
+        if cut.is_multiple_of(1 << 20) {
             progress.check(cut, n)?;
         }
         let xi = x as usize;

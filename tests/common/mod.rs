@@ -23,6 +23,10 @@ pub fn data_dir() -> Option<PathBuf> {
 /// One dataset from the shared folder, or None (skip) when absent.
 pub fn dataset(name: &str) -> Option<PathBuf> {
     let p = data_dir()?.join(name);
-    assert!(p.is_file(), "{} is missing from the data folder", p.display());
+    assert!(
+        p.is_file(),
+        "{} is missing from the data folder",
+        p.display()
+    );
     Some(p)
 }

@@ -130,12 +130,13 @@ pub enum ReadError {
         message: String,
     },
     /// The file could not be opened or read.
-    #[error("{path}: cannot read: {source}")]
+    #[error("{path}: cannot read: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// The operating system's reason.
-        source: std::io::Error,
+        /// The operating system's reason (part of the message, so not a
+        /// `source`: printing the chain would repeat it).
+        error: std::io::Error,
     },
     /// The volume would not fit in memory with its contour tree.
     #[error(
@@ -156,12 +157,12 @@ pub enum ReadError {
         available: u64,
     },
     /// The values do not make a valid field.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Field {
         /// The file.
         path: PathBuf,
-        /// What is wrong.
-        source: FieldError,
+        /// What is wrong (part of the message, so not a `source`).
+        error: FieldError,
     },
 }
 
@@ -186,10 +187,10 @@ pub(crate) fn invalid(path: &Path, message: impl Into<String>) -> ReadError {
 }
 
 /// An [`ReadError::Io`] for `path`.
-pub(crate) fn io_error(path: &Path, source: std::io::Error) -> ReadError {
+pub(crate) fn io_error(path: &Path, error: std::io::Error) -> ReadError {
     ReadError::Io {
         path: path.to_owned(),
-        source,
+        error,
     }
 }
 
@@ -317,9 +318,9 @@ pub fn check_volume_size(
     ty: ScalarType,
     opts: &ReadOptions,
 ) -> Result<usize, ReadError> {
-    let n = checked_vertex_count(dims).map_err(|source| ReadError::Field {
+    let n = checked_vertex_count(dims).map_err(|error| ReadError::Field {
         path: path.to_owned(),
-        source,
+        error,
     })?;
     debug_assert!(n <= MAX_VERTICES);
     let needed = memory_needed(n, ty.stored_size());
@@ -445,9 +446,9 @@ pub(crate) fn finish(
             }
         }
     }
-    let field = ScalarField::with_spacing(dims, sp, values).map_err(|source| ReadError::Field {
+    let field = ScalarField::with_spacing(dims, sp, values).map_err(|error| ReadError::Field {
         path: path.to_owned(),
-        source,
+        error,
     })?;
     Ok(Volume {
         field,

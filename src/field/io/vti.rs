@@ -253,6 +253,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
 /// needed parts lie beyond it.
 fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadError> {
     let bad = |m: String| invalid(path, m);
+    let malformed = |m: String| invalid(path, format!("malformed XML: {m}"));
     let mut pos = 0;
     let mut root = None;
     let mut extent = None;
@@ -262,7 +263,7 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
     let mut array: Option<Tag> = None;
     let mut inline = None;
     loop {
-        let Some(tag) = next_tag(buf, pos).map_err(&bad)? else {
+        let Some(tag) = next_tag(buf, pos).map_err(malformed)? else {
             if whole {
                 return Err(bad(match (&root, &array) {
                     (None, _) => "not a VTK XML file (no <VTKFile> element)".into(),

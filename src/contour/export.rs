@@ -1,0 +1,166 @@
+//! Writing contours to files: binary little-endian PLY (one face property
+//! `contour` per triangle naming its object), Wavefront OBJ (one `o` object
+//! per contour, with normals) and binary STL (triangles only, facet normals).
+//! The format follows the file's extension.
+
+use super::ContourMesh;
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
+use thiserror::Error;
+
+/// Why contours could not be written.
+#[derive(Debug, Error)]
+pub enum ExportError {
+    /// The extension names no format we write.
+    #[error("{path}: unknown mesh format (use .ply, .obj or .stl)")]
+    UnknownFormat {
+        /// The file.
+        path: String,
+    },
+    /// The file could not be written.
+    #[error("{path}: cannot write: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: io::Error,
+    },
+}
+
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Binary little-endian PLY.
+    Ply,
+    /// Wavefront OBJ (text).
+    Obj,
+    /// Binary STL.
+    Stl,
+}
+
+impl MeshFormat {
+    /// The format a file name's extension names, if any.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "ply" => Some(Self::Ply),
+            "obj" => Some(Self::Obj),
+            "stl" => Some(Self::Stl),
+            _ => None,
+        }
+    }
+}
+
+/// Writes `contours` to `path`, one named object per contour (`names`
+/// parallel to `contours`), in the format of its extension.
+pub fn write_contours(
+    path: &Path,
+    contours: &[ContourMesh],
+    names: &[String],
+) -> Result<(), ExportError> {
+    let shown = || path.display().to_string();
+    let format =
+        MeshFormat::from_path(path).ok_or_else(|| ExportError::UnknownFormat { path: shown() })?;
+    let io_err = |source| ExportError::Io {
+        path: shown(),
+        source,
+    };
+    let file = std::fs::File::create(path).map_err(io_err)?;
+    let mut w = BufWriter::new(file);
+    match format {
+        MeshFormat::Ply => write_ply(&mut w, contours),
+        MeshFormat::Obj => write_obj(&mut w, contours, names),
+        MeshFormat::Stl => write_stl(&mut w, contours),
+    }
+    .and_then(|_| w.flush())
+    .map_err(io_err)
+}
+
+/// Binary PLY: vertices with normals, faces with the index of their
+/// contour.
+pub fn write_ply(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()> {
+    let nv: usize = contours.iter().map(|c| c.positions.len()).sum();
+    let nf: usize = contours.iter().map(|c| c.num_triangles()).sum();
+    write!(
+        w,
+        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n\
+         element vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\n\
+         element face {nf}\nproperty list uchar int vertex_indices\nproperty int contour\nend_header\n"
+    )?;
+    for c in contours {
+        for (p, n) in c.positions.iter().zip(&c.normals) {
+            for x in p.iter().chain(n) {
+                w.write_all(&x.to_le_bytes())?;
+            }
+        }
+    }
+    let mut base = 0u32;
+    for (i, c) in contours.iter().enumerate() {
+        for t in c.indices.chunks_exact(3) {
+            w.write_all(&[3u8])?;
+            for &v in t {
+                w.write_all(&((base + v) as i32).to_le_bytes())?;
+            }
+            w.write_all(&(i as i32).to_le_bytes())?;
+        }
+        base += c.positions.len() as u32;
+    }
+    Ok(())
+}
+
+/// OBJ: one object per contour, positions, normals, 1-based faces.
+pub fn write_obj(w: &mut impl Write, contours: &[ContourMesh], names: &[String]) -> io::Result<()> {
+    writeln!(w, "# flexiso contours")?;
+    let mut base = 1usize;
+    for (i, c) in contours.iter().enumerate() {
+        let name = names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("contour_{i}"));
+        writeln!(w, "o {name}")?;
+        for p in &c.positions {
+            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+        for n in &c.normals {
+            writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
+        }
+        for t in c.indices.chunks_exact(3) {
+            let [a, b, d] = [0, 1, 2].map(|k| t[k] as usize + base);
+            writeln!(w, "f {a}//{a} {b}//{b} {d}//{d}")?;
+        }
+        base += c.positions.len();
+    }
+    Ok(())
+}
+
+/// Binary STL: every triangle of every contour with its facet normal.
+pub fn write_stl(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()> {
+    let mut header = [0u8; 80];
+    let text = b"flexiso contours";
+    header[..text.len()].copy_from_slice(text);
+    w.write_all(&header)?;
+    let nf: usize = contours.iter().map(|c| c.num_triangles()).sum();
+    w.write_all(&(nf as u32).to_le_bytes())?;
+    for c in contours {
+        for t in c.indices.chunks_exact(3) {
+            let p = [0, 1, 2].map(|k| c.positions[t[k] as usize]);
+            let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+            let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+            let mut n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if l > 0.0 {
+                n = n.map(|x| x / l);
+            }
+            for x in n.iter().chain(p.iter().flatten()) {
+                w.write_all(&x.to_le_bytes())?;
+            }
+            w.write_all(&[0, 0])?;
+        }
+    }
+    Ok(())
+}

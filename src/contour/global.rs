@@ -1,0 +1,99 @@
+//! Every contour at one isovalue: the classic isosurface as the union of
+//! the contours of the superarcs spanning it, one mesh per superarc,
+//! extracted in parallel; and a plain marching-tetrahedra pass over the
+//! whole volume, kept as the independent oracle of the tests.
+
+use super::follow::{ContourFollower, IdBuildHasher, TetTables};
+use super::seed::{arc_spans, path_seed};
+use super::{ContourMesh, Isovalue};
+use crate::field::{Scalar, ScalarField};
+use crate::mesh::CUBE_TETRAHEDRA;
+use crate::tree::{ArcId, ContourTree};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// The superarcs spanning `iso`, ascending by id: one per component of
+/// the level set.
+pub fn spanning_arcs(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ArcId> {
+    (0..tree.arcs().len() as u32)
+        .map(ArcId)
+        .filter(|&a| arc_spans(tree, field, a, iso))
+        .collect()
+}
+
+/// Every contour at `iso`, one mesh per spanning superarc, sorted by arc
+/// id. Contours are followed in parallel (rayon), one follower per worker.
+pub fn all_contours(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ContourMesh> {
+    let arcs = spanning_arcs(tree, field, iso);
+    arcs.par_iter()
+        .map_init(
+            || ContourFollower::new(field),
+            |follower, &arc| match path_seed(tree, field, arc, iso) {
+                Some(seed) => follower.follow(&seed, iso),
+                None => ContourMesh::empty(arc),
+            },
+        )
+        .collect()
+}
+
+/// The whole isosurface at `iso` by a plain marching-tetrahedra pass over
+/// every tetrahedron of the volume, as one indexed mesh (arc 0), with the
+/// same case tables, interpolation and vertex sharing as contour following.
+/// O(volume): the tests' oracle, not the explorer's path.
+pub fn marching_tetrahedra(field: &ScalarField, iso: Isovalue) -> ContourMesh {
+    let mut out = ContourMesh::empty(ArcId(0));
+    let dims = field.dims();
+    if dims.iter().any(|&d| d < 2) {
+        return out;
+    }
+    crate::with_values!(field.values(), v => march(v.as_slice(), field, iso, &mut out));
+    out.normals = super::follow::vertex_normals(&out.positions, &out.indices);
+    out
+}
+
+fn march<T: Scalar>(values: &[T], field: &ScalarField, iso: Isovalue, out: &mut ContourMesh) {
+    let dims = field.dims();
+    let spacing = field.spacing();
+    let tables = TetTables::get();
+    let (sy, sz) = (dims[0], dims[0] * dims[1]);
+    let off = |m: u8| (m & 1) as usize + sy * (m >> 1 & 1) as usize + sz * (m >> 2 & 1) as usize;
+    let mut edge_vertex: HashMap<u64, u32, IdBuildHasher> = HashMap::default();
+    for z in 0..dims[2] - 1 {
+        for y in 0..dims[1] - 1 {
+            for x in 0..dims[0] - 1 {
+                let o = x + sy * y + sz * z;
+                for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
+                    let ids = t.map(|m| (o + off(m)) as u32);
+                    let vals = ids.map(|v| values[v as usize].to_f64());
+                    let mut mask = 0u8;
+                    for l in 0..4 {
+                        mask |= (iso.above_value(vals[l], ids[l]) as u8) << l;
+                    }
+                    let (tris, count) = &tables.cases[p][mask as usize];
+                    for tri in &tris[..*count as usize] {
+                        for &(b, a) in tri {
+                            let (vb, va) = (ids[b as usize], ids[a as usize]);
+                            let k = (vb.min(va) as u64) << 32 | vb.max(va) as u64;
+                            let next = out.positions.len() as u32;
+                            let idx = *edge_vertex.entry(k).or_insert_with(|| {
+                                let (fb, fa) = (vals[b as usize], vals[a as usize]);
+                                let s = if fa != fb {
+                                    ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
+                                } else {
+                                    0.5
+                                };
+                                let (cb, ca) = (field.coords(vb), field.coords(va));
+                                out.positions.push(std::array::from_fn(|k| {
+                                    let (pb, pa) = (cb[k] as f64, ca[k] as f64);
+                                    ((pb + s * (pa - pb)) * spacing[k]) as f32
+                                }));
+                                next
+                            });
+                            out.indices.push(idx);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

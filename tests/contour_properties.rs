@@ -1,0 +1,237 @@
+//! Contour following against independent oracles: topology of every
+//! extracted contour, the tree's Betti prediction, and a plain
+//! marching-tetrahedra pass over the whole volume.
+
+use flexiso::contour::{
+    ContourFollower, ContourMesh, Isovalue, MeshTopology, all_contours, marching_tetrahedra,
+    path_seed,
+};
+use flexiso::field::{ScalarField, Values};
+use flexiso::measure::betti::ContourTopology;
+use flexiso::progress::Progress;
+use flexiso::tree::{ArcId, ContourTree};
+use proptest::prelude::*;
+
+fn tree_of(field: &ScalarField) -> ContourTree {
+    ContourTree::from_field(field, &Progress::new())
+        .expect("not cancelled")
+        .0
+}
+
+/// Checks every contour at `iso`, returns them.
+fn check_all(
+    field: &ScalarField,
+    tree: &ContourTree,
+    betti: &ContourTopology,
+    iso: Isovalue,
+) -> Vec<ContourMesh> {
+    let contours = all_contours(tree, field, iso);
+    for c in &contours {
+        let t = MeshTopology::of(&c.positions, &c.indices);
+        assert!(
+            c.num_triangles() > 0,
+            "arc {:?} at {iso:?}: empty contour",
+            c.arc
+        );
+        assert_eq!(t.components, 1, "arc {:?}: one component", c.arc);
+        assert_eq!(t.non_manifold_edges, 0, "manifold edges");
+        assert_eq!(t.non_manifold_vertices, 0, "manifold vertices");
+        assert_eq!(t.misoriented_edges, 0, "consistently oriented");
+        assert_eq!(t.vertices, c.positions.len(), "no unused vertex");
+        assert_eq!(c.normals.len(), c.positions.len());
+        assert_eq!(
+            t.is_closed(),
+            !c.touches_boundary,
+            "closed iff inside the box"
+        );
+        let predicted = betti.at(c.arc, field, iso);
+        assert_eq!(
+            t.euler, predicted.euler,
+            "arc {:?} at {iso:?}: Euler characteristic",
+            c.arc
+        );
+        assert_eq!(
+            t.is_closed(),
+            predicted.closed(),
+            "arc {:?}: closedness",
+            c.arc
+        );
+    }
+    // The union is the plain isosurface.
+    let all = marching_tetrahedra(field, iso);
+    let whole = MeshTopology::of(&all.positions, &all.indices);
+    let tris: usize = contours.iter().map(|c| c.num_triangles()).sum();
+    assert_eq!(
+        tris,
+        all.num_triangles(),
+        "same triangles as marching tetrahedra"
+    );
+    let area: f64 = contours
+        .iter()
+        .map(|c| MeshTopology::of(&c.positions, &c.indices).area)
+        .sum();
+    assert!(
+        (area - whole.area).abs() <= 1e-4 * (1.0 + whole.area),
+        "area {area} vs {}",
+        whole.area
+    );
+    assert_eq!(
+        contours.len(),
+        whole.components,
+        "one contour per level-set component"
+    );
+    contours
+}
+
+fn random_field() -> impl Strategy<Value = ScalarField> {
+    (2usize..7, 2usize..7, 2usize..7).prop_flat_map(|(x, y, z)| {
+        proptest::collection::vec(0u8..7, x * y * z)
+            .prop_map(move |v| ScalarField::new([x, y, z], Values::U8(v)).expect("valid"))
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn contours_match_marching_tetrahedra_and_betti_on_random_grids(
+        field in random_field(),
+        h in 0u32..14,
+    ) {
+        let tree = tree_of(&field);
+        let betti = ContourTopology::new(&tree, &field);
+        // Even h: exactly a vertex value (ties everywhere); odd: between.
+        let iso = Isovalue::new(h as f64 / 2.0);
+        check_all(&field, &tree, &betti, iso);
+    }
+
+    #[test]
+    fn extraction_just_above_any_vertex_works(field in random_field(), pick in 0usize..1000) {
+        let tree = tree_of(&field);
+        let betti = ContourTopology::new(&tree, &field);
+        let v = (pick % field.len()) as u32;
+        check_all(&field, &tree, &betti, Isovalue::just_above(&field, v));
+    }
+
+    #[test]
+    fn contours_on_noisy_float_grids(
+        dims in (3usize..9, 3usize..9, 3usize..9),
+        seed in any::<u64>(),
+        t in 0.0f64..1.0,
+    ) {
+        let n = dims.0 * dims.1 * dims.2;
+        let mut s = seed | 1;
+        let values: Vec<f32> = (0..n).map(|_| {
+            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }).collect();
+        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let tree = tree_of(&field);
+        let betti = ContourTopology::new(&tree, &field);
+        check_all(&field, &tree, &betti, Isovalue::new(t));
+    }
+}
+
+/// A field sampled from `f` on `n` points per axis over [lo, hi]^3-ish boxes.
+fn analytic(
+    dims: [usize; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    f: impl Fn([f64; 3]) -> f64,
+) -> ScalarField {
+    let mut v = Vec::new();
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let p = [x, y, z];
+                let q: [f64; 3] = std::array::from_fn(|k| {
+                    lo[k] + (hi[k] - lo[k]) * p[k] as f64 / (dims[k] - 1) as f64
+                });
+                v.push(f(q) as f32);
+            }
+        }
+    }
+    ScalarField::new(dims, Values::F32(v)).expect("valid")
+}
+
+/// The contours at `h` with their (Euler characteristic, closed) sorted.
+fn contour_topologies(field: &ScalarField, h: f64) -> Vec<(i64, bool)> {
+    let tree = tree_of(field);
+    let betti = ContourTopology::new(&tree, field);
+    let mut out: Vec<(i64, bool)> = check_all(field, &tree, &betti, Isovalue::new(h))
+        .iter()
+        .map(|c| {
+            let t = MeshTopology::of(&c.positions, &c.indices);
+            (t.euler, t.is_closed())
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+#[test]
+fn sphere_contour_has_euler_characteristic_two() {
+    let f = analytic([20, 20, 20], [-1.0; 3], [1.0; 3], |p| {
+        -(p[0] * p[0] + p[1] * p[1] + 1.3 * p[2] * p[2] + 0.1 * p[0])
+    });
+    assert_eq!(contour_topologies(&f, -0.5), vec![(2, true)]);
+}
+
+#[test]
+fn torus_contour_has_genus_one() {
+    let f = analytic([40, 40, 16], [-1.0, -1.0, -0.4], [1.0, 1.0, 0.4], |p| {
+        let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
+        // Tilted so the ridge circle is not a plateau of maxima.
+        -((rho - 0.6).powi(2) + p[2] * p[2]) + 0.01 * p[0]
+    });
+    assert_eq!(contour_topologies(&f, -0.04), vec![(0, true)]);
+}
+
+#[test]
+fn double_torus_contour_has_genus_two() {
+    let f = analytic([72, 40, 16], [-0.3, -0.7, -0.25], [2.3, 0.7, 0.25], |p| {
+        let [x, y, z] = p;
+        let g = x * (x - 1.0).powi(2) * (x - 2.0) + y * y;
+        -(g * g + z * z) + 0.001 * x
+    });
+    assert_eq!(contour_topologies(&f, -0.01), vec![(-2, true)]);
+}
+
+#[test]
+fn nested_spheres_are_two_contours() {
+    // A hollow shell around a core: below the shell's crest the level set
+    // is an outer sphere and an inner one; deeper inside, a core sphere.
+    let f = analytic([30, 30, 30], [-1.0; 3], [1.0; 3], |p| {
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        (-((r - 0.6) / 0.15).powi(2)).exp() + 0.02 * p[2]
+    });
+    assert_eq!(contour_topologies(&f, 0.5), vec![(2, true), (2, true)]);
+}
+
+#[test]
+fn a_contour_cut_by_the_box_is_open() {
+    let f = analytic([12, 12, 12], [0.0; 3], [1.0; 3], |p| {
+        p[0] + 0.3 * p[1] + 0.1 * p[2]
+    });
+    assert_eq!(contour_topologies(&f, 0.6), vec![(1, false)]);
+}
+
+#[test]
+fn follower_is_reusable_and_seed_lies_on_the_contour() {
+    let field = flexiso::field::synthetic::Synthetic::cube(24).generate();
+    let tree = tree_of(&field);
+    let mut follower = ContourFollower::new(&field);
+    let (lo, hi) = field.range();
+    for k in 1..10 {
+        let iso = Isovalue::new(lo + (hi - lo) * k as f64 / 10.0);
+        for a in 0..tree.arcs().len() as u32 {
+            let Some(seed) = path_seed(&tree, &field, ArcId(a), iso) else {
+                continue;
+            };
+            assert!(iso.is_above(&field, seed.above) && !iso.is_above(&field, seed.below));
+            let first = follower.follow(&seed, iso);
+            let again = follower.follow(&seed, iso);
+            assert_eq!(first, again);
+        }
+    }
+}

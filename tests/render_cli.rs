@@ -1,0 +1,121 @@
+//! `flexiso render` end to end: the binary writes a PNG of the contours, and
+//! refuses bad requests with a message. Rendering needs an adapter: those
+//! checks are skipped without one unless `FLEXISO_REQUIRE_GPU=1`.
+
+use std::process::Command;
+
+use flexiso::field::synthetic::Synthetic;
+use flexiso::progress::Progress;
+use flexiso::render::{DEFAULT_BACKGROUND, Gpu};
+use flexiso::tree::ContourTree;
+
+fn has_gpu() -> bool {
+    match Gpu::new() {
+        Ok(_) => true,
+        Err(e) => {
+            assert!(
+                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
+                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
+            );
+            eprintln!("skipping: {e}");
+            false
+        }
+    }
+}
+
+fn flexiso(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_flexiso"))
+        .args(args)
+        .output()
+        .expect("run flexiso")
+}
+
+fn drawn_fraction(img: &image::RgbaImage) -> f32 {
+    let bg = DEFAULT_BACKGROUND.map(|c| (c * 255.0).round() as i32);
+    let drawn = img
+        .pixels()
+        .filter(|p| {
+            p.0.iter()
+                .zip(bg)
+                .any(|(a, b)| (i32::from(*a) - b).abs() > 1)
+        })
+        .count();
+    drawn as f32 / (img.width() * img.height()) as f32
+}
+
+#[test]
+fn render_writes_a_png_of_all_contours_and_of_one_arc() {
+    if !has_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("temp dir");
+    let all = dir.path().join("all.png");
+    let out = flexiso(&[
+        "render",
+        "synthetic:32",
+        "--out",
+        all.to_str().expect("utf-8 path"),
+        "--size",
+        "320x240",
+        "--iso",
+        "0.45",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(&all).expect("png").to_rgba8();
+    assert_eq!(img.dimensions(), (320, 240));
+    let f = drawn_fraction(&img);
+    assert!(f > 0.02 && f < 0.6, "drawn fraction {f}");
+
+    // One arc: the highest maximum's, by its end vertices.
+    let field = Synthetic::cube(32).generate();
+    let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("tree");
+    let a = tree
+        .arcs()
+        .iter()
+        .max_by(|a, b| {
+            let f = |x: &flexiso::tree::Superarc| field.value(tree.node(x.upper).vertex);
+            f(a).total_cmp(&f(b))
+        })
+        .expect("arcs");
+    let (upper, lower) = (tree.node(a.upper).vertex, tree.node(a.lower).vertex);
+    let one = dir.path().join("one.png");
+    let out = flexiso(&[
+        "render",
+        "synthetic:32",
+        "--out",
+        one.to_str().expect("utf-8 path"),
+        "--size",
+        "200x150",
+        "--arc",
+        &format!("{upper}:{lower}"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(&one).expect("png").to_rgba8();
+    assert_eq!(img.dimensions(), (200, 150));
+    assert!(drawn_fraction(&img) > 0.001);
+}
+
+#[test]
+fn render_refuses_bad_requests_with_a_message() {
+    // None of these gets as far as the GPU.
+    let cases: [(&[&str], &str); 4] = [
+        (&["render", "synthetic:8", "--size", "big"], "WxH"),
+        (&["render", "synthetic:8", "--arc", "7"], "UPPER:LOWER"),
+        (&["render", "synthetic:8", "--arc", "1:2"], "no superarc"),
+        (&["render", "synthetic:8", "--iso", "99"], "outside"),
+    ];
+    for (args, expect) in cases {
+        let out = flexiso(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expect), "{args:?}: {err}");
+    }
+}
