@@ -12,9 +12,11 @@ use flexiso::progress::Progress;
 use flexiso::tree::{ArcId, ContourTree, VertexPlace};
 
 /// Number of components of {w beyond v} (above v when `up`) that touch v,
-/// by flooding from each neighbour beyond v. A flood stops early once it
-/// has reached every such neighbour, so vertices in big regular regions
-/// cost one flood at most.
+/// by flooding the mesh from each neighbour beyond v. The floods advance in
+/// lockstep, one vertex each per round, and merge when they meet; the count
+/// is known once at most one group of merged floods can still grow. So a
+/// saddle costs about the size of its smaller components, never a flood of
+/// the whole volume.
 fn degree_by_flooding(field: &ScalarField, v: u32, up: bool) -> u32 {
     let mesh = field.mesh();
     let beyond = |w: u32| {
@@ -30,32 +32,64 @@ fn degree_by_flooding(field: &ScalarField, v: u32, up: bool) -> u32 {
             starts.push(u)
         }
     });
-    let mut seen = std::collections::HashSet::new();
-    let mut components = 0;
-    for &s in &starts {
-        if seen.contains(&s) {
-            continue;
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
         }
-        components += 1;
-        let mut reached = starts.iter().filter(|u| seen.contains(*u)).count();
-        let mut stack = vec![s];
-        seen.insert(s);
-        reached += 1;
-        while let Some(x) = stack.pop() {
-            if reached == starts.len() {
-                break;
+        x
+    }
+    let k = starts.len();
+    let mut group: Vec<usize> = (0..k).collect();
+    let mut owner = std::collections::HashMap::new();
+    let mut frontier: Vec<std::collections::VecDeque<u32>> = vec![Default::default(); k];
+    for (i, &s) in starts.iter().enumerate() {
+        match owner.get(&s) {
+            Some(&j) => {
+                let (a, b) = (find(&mut group, i), find(&mut group, j));
+                group[a] = b;
             }
+            None => {
+                owner.insert(s, i);
+                frontier[i].push_back(s);
+            }
+        }
+    }
+    loop {
+        let mut growing = std::collections::HashSet::new();
+        for i in 0..k {
+            if !frontier[i].is_empty() {
+                growing.insert(find(&mut group, i));
+            }
+        }
+        if growing.len() <= 1 {
+            break;
+        }
+        for i in 0..k {
+            let Some(x) = frontier[i].pop_front() else {
+                continue;
+            };
             mesh.for_each_neighbour(x, |w| {
-                if beyond(w) && seen.insert(w) {
-                    stack.push(w);
-                    if starts.contains(&w) {
-                        reached += 1;
+                if !beyond(w) {
+                    return;
+                }
+                match owner.get(&w) {
+                    Some(&j) => {
+                        let (a, b) = (find(&mut group, i), find(&mut group, j));
+                        group[a] = b;
+                    }
+                    None => {
+                        owner.insert(w, i);
+                        frontier[i].push_back(w);
                     }
                 }
             });
         }
     }
-    components
+    (0..k)
+        .map(|i| find(&mut group, i))
+        .collect::<std::collections::HashSet<_>>()
+        .len() as u32
 }
 
 fn check_dataset(name: &str) {

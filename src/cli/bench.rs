@@ -6,14 +6,21 @@
 //! dataset through /proc/self/clear_refs; "engine B/vertex" is that peak
 //! minus the resident set once the values are loaded, over the vertex count:
 //! what the contour tree costs beyond the input.
+//!
+//! After the tree come the columns of simplification: arcs left once
+//! zero-height arcs are collapsed, seconds to the measures (hypervolume)
+//! plus the whole pruning sequence, and the slowest of a series of level
+//! changes (full tree, 100 arcs, random levels, back), in milliseconds.
 
 use crate::field::ScalarField;
 use crate::field::io::{ReadOptions, read_volume};
 use crate::field::synthetic::Synthetic;
 use crate::progress::Progress;
+use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
 use anyhow::Context;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Arguments of `flexiso bench`.
@@ -50,6 +57,12 @@ pub struct Row {
     pub peak_rss: u64,
     /// Peak minus resident set with the values loaded, bytes.
     pub engine_bytes: u64,
+    /// Arcs after collapsing zero-height arcs.
+    pub collapsed: usize,
+    /// Seconds to collapse, measure and compute the pruning sequence.
+    pub simplification: Duration,
+    /// Slowest single level change.
+    pub level_change: Duration,
 }
 
 /// Runs `flexiso bench`.
@@ -117,6 +130,7 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             Err(_) => unreachable!("nobody cancels a benchmark"),
         };
         let peak = peak_rss();
+        let (collapsed, simplification, level_change) = simplification_times(&tree, field);
         let row = Row {
             name: name.to_owned(),
             dims: field.dims(),
@@ -125,6 +139,9 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             superarcs: tree.arcs().len(),
             peak_rss: peak,
             engine_bytes: peak.saturating_sub(base),
+            collapsed,
+            simplification,
+            level_change,
         };
         drop(tree);
         if best
@@ -137,10 +154,39 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
     best.unwrap_or_else(|| unreachable!("repeat >= 1"))
 }
 
+/// Collapse, measures and pruning sequence (hypervolume), then the slowest
+/// of a series of level changes: what a user feels when moving the slider.
+fn simplification_times(tree: &ContourTree, field: &ScalarField) -> (usize, Duration, Duration) {
+    let t = Instant::now();
+    let collapsed = CollapsedTree::new(tree, field);
+    let sim = Simplification::from_collapsed(&collapsed, Measure::Hypervolume);
+    let sequence = t.elapsed();
+    let arcs = collapsed.num_arcs();
+    drop(collapsed);
+    let mut level = SimplifiedTree::new(Arc::new(sim));
+    // A fixed pseudo-random walk over levels, always through the extremes.
+    let mut targets = vec![arcs, 100, arcs, 1, 100];
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    for _ in 0..20 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        targets.push(1 + (x % arcs.max(1) as u64) as usize);
+    }
+    targets.push(arcs);
+    let mut slowest = Duration::ZERO;
+    for n in targets {
+        let t = Instant::now();
+        level.set_level(n);
+        slowest = slowest.max(t.elapsed());
+    }
+    (arcs, sequence, slowest)
+}
+
 /// The table header.
 pub fn header() -> String {
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>8}",
         "dataset",
         "dims",
         "superarcs",
@@ -153,7 +199,10 @@ pub fn header() -> String {
         "total",
         "s/Mvox",
         "peak MiB",
-        "B/vert"
+        "B/vert",
+        "collapsed",
+        "simp",
+        "level ms"
     )
 }
 
@@ -162,7 +211,7 @@ pub fn format_row(r: &Row) -> String {
     let n = (r.dims[0] * r.dims[1] * r.dims[2]) as f64;
     let s = |d: Duration| format!("{:.3}", d.as_secs_f64());
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>8.3}",
         r.name,
         format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
         r.superarcs,
@@ -176,6 +225,9 @@ pub fn format_row(r: &Row) -> String {
         r.times.total().as_secs_f64() / (n / 1e6),
         r.peak_rss as f64 / (1 << 20) as f64,
         r.engine_bytes as f64 / n,
+        r.collapsed,
+        s(r.simplification),
+        r.level_change.as_secs_f64() * 1e3,
     )
 }
 
