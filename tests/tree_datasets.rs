@@ -57,14 +57,16 @@ fn degree_by_flooding(field: &ScalarField, v: u32, up: bool) -> u32 {
     }
     loop {
         let mut growing = std::collections::HashSet::new();
-        for i in 0..k {
-            if !frontier[i].is_empty() {
+        for (i, f) in frontier.iter().enumerate() {
+            if !f.is_empty() {
                 growing.insert(find(&mut group, i));
             }
         }
         if growing.len() <= 1 {
             break;
         }
+        // Indices, not iterators: the closure below pushes into `frontier`.
+        #[allow(clippy::needless_range_loop)]
         for i in 0..k {
             let Some(x) = frontier[i].pop_front() else {
                 continue;
