@@ -1,6 +1,7 @@
 //! `flexiso bench [DIR]`: the engine on every volume of a folder and on a
 //! synthetic noisy 256^3 float field, one table row each: stage times, peak
-//! memory and bytes per vertex.
+//! memory and bytes per vertex. The join and split sweeps run in parallel,
+//! so their columns overlap in the total.
 //!
 //! Peak memory is the process's peak resident set (VmHWM), reset before each
 //! dataset through /proc/self/clear_refs; "engine B/vertex" is that peak
@@ -186,12 +187,13 @@ fn simplification_times(tree: &ContourTree, field: &ScalarField) -> (usize, Dura
 /// The table header.
 pub fn header() -> String {
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>8}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>8}",
         "dataset",
         "dims",
         "superarcs",
         "load",
         "sort",
+        "links",
         "join",
         "split",
         "merge",
@@ -211,12 +213,13 @@ pub fn format_row(r: &Row) -> String {
     let n = (r.dims[0] * r.dims[1] * r.dims[2]) as f64;
     let s = |d: Duration| format!("{:.3}", d.as_secs_f64());
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>8.3}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>8.3}",
         r.name,
         format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
         r.superarcs,
         s(r.load),
         s(r.times.sort),
+        s(r.times.links),
         s(r.times.join),
         s(r.times.split),
         s(r.times.merge),
