@@ -91,9 +91,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let s = |d: std::time::Duration| d.as_secs_f64();
     println!(
-        "time (s):       load {:.3}  sort {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
+        "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
         s(load),
         s(times.sort),
+        s(times.links),
         s(times.join),
         s(times.split),
         s(times.sweeps),
