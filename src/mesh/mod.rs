@@ -10,6 +10,7 @@
 //!
 //! No edge list is stored: the mesh costs nothing per vertex.
 
+use crate::field::VertexOrder;
 use strength_reduce::StrengthReducedU32;
 
 /// A simplicial mesh as the contour tree engine sees it: vertices `0..n` and
@@ -38,6 +39,15 @@ pub trait Mesh: Sync {
     #[inline(always)]
     fn link_code(&self, _v: u32, _above: impl FnMut(u32) -> bool) -> u8 {
         LINK_SEVERAL | LINK_SEVERAL << 4
+    }
+
+    /// [`Mesh::link_code`] of the vertices `first ..` (one per byte of
+    /// `out`) in id order, each upper link taken in `order`.
+    fn link_codes_into<O: VertexOrder + ?Sized>(&self, order: &O, first: u32, out: &mut [u8]) {
+        for (i, code) in out.iter_mut().enumerate() {
+            let v = first + i as u32;
+            *code = self.link_code(v, |u| order.above(u, v));
+        }
     }
 
     /// The neighbour of `v` named by a [`Mesh::link_code`] index.
@@ -122,6 +132,10 @@ pub struct FreudenthalGrid {
 #[derive(Clone, Debug)]
 struct LinkTable {
     entries: Vec<u64>,
+    /// Per mask, the nibble of [`Mesh::link_code`]: [`LINK_EMPTY`], the
+    /// representative of the single component, or [`LINK_SEVERAL`]. One
+    /// byte per entry keeps the table in L1 for the link pass.
+    codes: Vec<u8>,
 }
 
 impl LinkTable {
@@ -164,8 +178,16 @@ impl LinkTable {
                 }
                 entry | count
             })
+            .collect::<Vec<u64>>();
+        let codes = entries
+            .iter()
+            .map(|&entry| match entry & 0xf {
+                0 => LINK_EMPTY,
+                1 => ((entry >> 4) & 0xf) as u8,
+                _ => LINK_SEVERAL,
+            })
             .collect();
-        Self { entries }
+        Self { entries, codes }
     }
 }
 
@@ -261,15 +283,40 @@ impl Mesh for FreudenthalGrid {
                 up |= 1 << i;
             }
         }
-        let code = |mask: u32| {
-            let entry = self.link.entries[mask as usize];
-            match entry & 0xf {
-                0 => LINK_EMPTY,
-                1 => ((entry >> 4) & 0xf) as u8,
-                _ => LINK_SEVERAL,
+        self.link.codes[up as usize] | self.link.codes[(present & !up) as usize] << 4
+    }
+
+    /// Walks the grid in id order, keeping (x, y, z) by increments, so that
+    /// interior vertices (nearly all of them) skip the boundary test and
+    /// compare all their neighbours branch-free.
+    fn link_codes_into<O: VertexOrder + ?Sized>(&self, order: &O, first: u32, out: &mut [u8]) {
+        let [dx, dy, dz] = self.dims.map(|d| d as u32);
+        let inside = |c: u32, d: u32| d == 1 || (c > 0 && c + 1 < d);
+        let all = (1u32 << self.directions.len()) - 1;
+        let [mut x, mut y, mut z] = self.coords(first);
+        let mut row_inside = inside(y, dy) && inside(z, dz);
+        for (i, code) in out.iter_mut().enumerate() {
+            let v = first + i as u32;
+            *code = if row_inside && inside(x, dx) {
+                let mut up = 0u32;
+                for (j, &o) in self.interior_offsets.iter().enumerate() {
+                    up |= (order.above((v as i64 + o) as u32, v) as u32) << j;
+                }
+                self.link.codes[up as usize] | self.link.codes[(all & !up) as usize] << 4
+            } else {
+                self.link_code(v, |u| order.above(u, v))
+            };
+            x += 1;
+            if x == dx {
+                x = 0;
+                y += 1;
+                if y == dy {
+                    y = 0;
+                    z += 1;
+                }
+                row_inside = inside(y, dy) && inside(z, dz);
             }
-        };
-        code(up) | code(present & !up) << 4
+        }
     }
 
     #[inline(always)]
@@ -402,6 +449,27 @@ mod tests {
         g.for_each_neighbour(v, |u| out.push(u));
         out.sort_unstable();
         out
+    }
+
+    #[test]
+    fn row_walk_link_codes_equal_per_vertex_codes() {
+        for dims in [[7, 6, 5], [5, 4, 1], [9, 1, 1], [3, 3, 3]] {
+            let g = FreudenthalGrid::new(dims);
+            let n = g.num_vertices();
+            // Few distinct values, so ties decide many comparisons.
+            let values: Vec<u8> = (0..n as u32)
+                .map(|v| (v.wrapping_mul(2654435761) >> 29) as u8)
+                .collect();
+            let values = values.as_slice();
+            let expected: Vec<u8> = (0..n as u32)
+                .map(|v| g.link_code(v, |u| values.above(u, v)))
+                .collect();
+            for first in [0, 1, n / 3, n - 1] {
+                let mut out = vec![0u8; n - first];
+                g.link_codes_into(values, first as u32, &mut out);
+                assert_eq!(out, expected[first..], "{dims:?} from {first}");
+            }
+        }
     }
 
     #[test]

@@ -172,11 +172,7 @@ pub fn link_codes<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> Vec
         .par_chunks_mut(1 << 16)
         .enumerate()
         .for_each(|(c, chunk)| {
-            let base = (c << 16) as u32;
-            for (i, code) in chunk.iter_mut().enumerate() {
-                let v = base + i as u32;
-                *code = mesh.link_code(v, |u| values.above(u, v));
-            }
+            mesh.link_codes_into(values, (c << 16) as u32, chunk);
         });
     codes
 }
