@@ -1,1 +1,873 @@
-//! (in progress)
+//! The explorer window (eframe + egui): a thin layer over the engine.
+//!
+//! * [`pipeline`]: reading, tree and simplification on a worker thread,
+//!   with a progress bar and cancellation; errors become messages and the
+//!   previous dataset stays.
+//! * [`tree_panel`]: the simplified contour tree, markers, global isovalue.
+//! * [`curve_panel`]: the simplification curve and the level slider.
+//! * [`view3d`]: the selected contours through [`crate::render`].
+//! * [`selection`]: the shared state the panels talk through.
+//! * [`layout`]: stable x positions of the tree's nodes.
+//!
+//! [`FlexisoApp`] owns them all and wires them together once per frame;
+//! no panel reaches into another's fields. Display toggles never trigger
+//! recomputation: only opening a file, changing the measure (background
+//! jobs) and moving a contour's isovalue (one contour, a few ms) compute.
+
+pub mod curve_panel;
+pub mod layout;
+pub mod pipeline;
+pub mod selection;
+pub mod tree_panel;
+pub mod view3d;
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::{Duration, Instant};
+
+use egui::{Color32, Key, Modifiers, RichText};
+
+use crate::cli::input::InputArgs;
+use crate::contour::{ContourMesh, Isovalue, all_contours};
+use crate::field::ScalarField;
+use crate::progress::Progress;
+use crate::simplify::{Measure, SimplifiedTree};
+
+use curve_panel::CurvePanel;
+use pipeline::{Dataset, Pipeline, Request};
+use selection::{PALETTE, Selection};
+use tree_panel::{TreePanel, fmt_value};
+use view3d::{SceneMesh, View3d};
+
+/// Renderer ids of the "all contours at h" meshes start here (selected
+/// contours use small ids).
+const ALL_CONTOURS_ID: u64 = 1 << 40;
+
+/// How many arcs the tree shows when a dataset opens.
+pub const DEFAULT_ARCS: usize = 100;
+
+/// A file dialog's answer, delivered from its thread.
+enum Dialog {
+    Open(PathBuf),
+    ExportContours(PathBuf),
+    Screenshot(PathBuf),
+    TreeJson(PathBuf),
+}
+
+/// Every contour at the global isovalue, one mesh per component.
+#[derive(Default)]
+struct AllContours {
+    key: Option<(u64, usize)>,
+    meshes: Vec<Arc<ContourMesh>>,
+    version: u64,
+    millis: f64,
+}
+
+/// Frame times written with `flexiso open --frame-log FILE`.
+struct FrameLog {
+    file: std::io::BufWriter<std::fs::File>,
+    start: Instant,
+    last: Option<Instant>,
+}
+
+/// The explorer.
+pub struct FlexisoApp {
+    pipeline: Pipeline,
+    dataset: Option<Dataset>,
+    level: Option<SimplifiedTree>,
+    measure: Measure,
+    selection: Selection,
+    global_h: f64,
+    show_all: bool,
+    all: AllContours,
+    tree_panel: TreePanel,
+    curve_panel: CurvePanel,
+    view3d: View3d,
+    error: Option<String>,
+    info: Option<String>,
+    dialog_tx: Sender<Dialog>,
+    dialog_rx: Receiver<Dialog>,
+    pending_screenshot: Option<PathBuf>,
+    frame_log: Option<FrameLog>,
+    /// UI time of the last frame (ms), shown in the status bar.
+    ui_ms: f64,
+    /// Where to write the screen positions of arcs and markers (scripts).
+    ui_dump: Option<(PathBuf, String)>,
+    all_checkbox: Option<egui::Rect>,
+}
+
+impl FlexisoApp {
+    /// An explorer with nothing loaded.
+    pub fn empty() -> Self {
+        let (dialog_tx, dialog_rx) = channel();
+        Self {
+            pipeline: Pipeline::new(),
+            dataset: None,
+            level: None,
+            measure: Measure::default(),
+            selection: Selection::default(),
+            global_h: 0.0,
+            show_all: false,
+            all: AllContours::default(),
+            tree_panel: TreePanel::new(),
+            curve_panel: CurvePanel::default(),
+            view3d: View3d::new(),
+            error: None,
+            info: None,
+            dialog_tx,
+            dialog_rx,
+            pending_screenshot: None,
+            frame_log: None,
+            ui_ms: 0.0,
+            ui_dump: None,
+            all_checkbox: None,
+        }
+    }
+
+    /// The window's app: starts `request` in the background at once.
+    pub fn new(cc: &eframe::CreationContext<'_>, request: Request) -> Self {
+        let mut app = Self::empty();
+        let ctx = cc.egui_ctx.clone();
+        app.pipeline
+            .set_notify(Arc::new(move || ctx.request_repaint()));
+        app.start(request);
+        app
+    }
+
+    /// An explorer on `field`, with the pipeline already run (tests: no
+    /// window needed).
+    pub fn new_for_test(field: ScalarField) -> Self {
+        let mut app = Self::empty();
+        let result = pipeline::run(
+            Request::Field {
+                name: "test".into(),
+                field: Arc::new(field),
+            },
+            app.measure,
+            &Progress::new(),
+        );
+        app.accept(result);
+        app
+    }
+
+    /// Writes one line per frame to `path`: seconds since start, ms since
+    /// the previous frame, ms spent in the UI code, the job stage.
+    pub fn set_frame_log(&mut self, path: &std::path::Path) -> std::io::Result<()> {
+        let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
+        writeln!(file, "t_s\tframe_ms\tui_ms\tstage")?;
+        self.frame_log = Some(FrameLog {
+            file,
+            start: Instant::now(),
+            last: None,
+        });
+        Ok(())
+    }
+
+    /// Writes, whenever they change, the screen positions (points) of the
+    /// tree's arcs and markers and of the panels to `path`, one per line:
+    /// `arc ID X Y`, `marker ID X Y`, `curve|tree|view X0 Y0 X1 Y1`, and
+    /// `contours N`. For scripts that click with xdotool.
+    pub fn set_ui_dump(&mut self, path: PathBuf) {
+        self.ui_dump = Some((path, String::new()));
+    }
+
+    fn write_ui_dump(&mut self, view: egui::Rect) {
+        let Some((path, last)) = &mut self.ui_dump else {
+            return;
+        };
+        let mut s = String::new();
+        let r = |s: &mut String, name: &str, r: egui::Rect| {
+            s.push_str(&format!(
+                "{name} {:.0} {:.0} {:.0} {:.0}\n",
+                r.min.x, r.min.y, r.max.x, r.max.y
+            ));
+        };
+        let d = &self.tree_panel.drawn;
+        if let Some(t) = d.rect {
+            r(&mut s, "tree", t);
+        }
+        if let Some(c) = self.curve_panel.plot_rect {
+            r(&mut s, "curve", c);
+        }
+        r(&mut s, "view", view);
+        if let Some(c) = self.all_checkbox {
+            r(&mut s, "allbox", c);
+        }
+        s.push_str(&format!("contours {}\n", self.selection.contours.len()));
+        for (id, p) in &d.markers {
+            s.push_str(&format!("marker {id} {:.0} {:.0}\n", p.x, p.y));
+        }
+        for (id, p) in &d.arcs {
+            s.push_str(&format!("arc {} {:.0} {:.0}\n", id.0, p.x, p.y));
+        }
+        if *last != s {
+            let _ = std::fs::write(&*path, &s);
+            *last = s;
+        }
+    }
+
+    /// Starts a background job (cancelling the current one).
+    pub fn start(&mut self, request: Request) {
+        let what = match &request {
+            Request::Open(i) => i.input.clone(),
+            Request::Field { name, .. } => name.clone(),
+            Request::Resimplify(_) => format!("{} simplification", self.measure),
+        };
+        self.pipeline.start(request, self.measure, what);
+    }
+
+    /// Opens a file (or `synthetic[:N]`) in the background.
+    pub fn open(&mut self, input: &str) {
+        self.start(Request::Open(InputArgs::from_input(input)));
+    }
+
+    /// Blocks until the current job ends and takes its result (tests).
+    pub fn wait_for_job(&mut self) {
+        if let Some(r) = self.pipeline.wait() {
+            self.accept(r);
+        }
+    }
+
+    /// True while a job runs.
+    pub fn busy(&self) -> bool {
+        self.pipeline.running().is_some()
+    }
+
+    /// The dataset shown.
+    pub fn dataset(&self) -> Option<&Dataset> {
+        self.dataset.as_ref()
+    }
+
+    /// The level of simplification shown.
+    pub fn level(&self) -> Option<&SimplifiedTree> {
+        self.level.as_ref()
+    }
+
+    /// The selection.
+    pub fn selection(&self) -> &Selection {
+        &self.selection
+    }
+
+    /// The tree panel (what it drew last frame).
+    pub fn tree_panel(&self) -> &TreePanel {
+        &self.tree_panel
+    }
+
+    /// The curve panel.
+    pub fn curve_panel(&self) -> &CurvePanel {
+        &self.curve_panel
+    }
+
+    /// The 3D view.
+    pub fn view3d(&self) -> &View3d {
+        &self.view3d
+    }
+
+    /// The error message shown, if any.
+    pub fn error(&self) -> Option<&str> {
+        self.error.as_deref()
+    }
+
+    /// The global isovalue.
+    pub fn global_h(&self) -> f64 {
+        self.global_h
+    }
+
+    fn accept(&mut self, result: pipeline::JobResult) {
+        match result {
+            Ok(ds) => {
+                let t = ds.times;
+                eprintln!(
+                    "flexiso: {} ready in {:.2} s (read {:.2}, tree {:.2}, simplify {:.2}, layout {:.2})",
+                    ds.name,
+                    t.total().as_secs_f64(),
+                    t.load.as_secs_f64(),
+                    t.tree.as_secs_f64(),
+                    t.simplify.as_secs_f64(),
+                    t.layout.as_secs_f64()
+                );
+                let same_field = self
+                    .dataset
+                    .as_ref()
+                    .is_some_and(|old| Arc::ptr_eq(&old.field, &ds.field));
+                let mut level = SimplifiedTree::new(Arc::clone(&ds.sim));
+                match (&self.level, same_field) {
+                    // Another measure: keep about as many arcs as before.
+                    (Some(old), true) => level.set_level(old.num_arcs()),
+                    _ => level.set_level(DEFAULT_ARCS),
+                }
+                if !same_field {
+                    let (lo, hi) = ds.field.range();
+                    self.global_h = 0.5 * (lo + hi);
+                    self.selection.clear();
+                    self.all = AllContours::default();
+                    let [nx, ny, nz] = ds.field.dims();
+                    let [sx, sy, sz] = ds.field.spacing();
+                    self.view3d.set_bounds(
+                        [0.0; 3],
+                        [
+                            ((nx - 1) as f64 * sx) as f32,
+                            ((ny - 1) as f64 * sy) as f32,
+                            ((nz - 1) as f64 * sz) as f32,
+                        ],
+                    );
+                    // Show something at once: the contour of the most
+                    // important arc spanning the middle value.
+                    self.tree_panel.reset();
+                }
+                for w in &ds.warnings {
+                    eprintln!("warning: {w}");
+                }
+                self.info = (!ds.warnings.is_empty()).then(|| ds.warnings.join("; "));
+                self.level = Some(level);
+                self.dataset = Some(ds);
+                self.error = None;
+            }
+            Err(e) if e == "cancelled" => {}
+            Err(e) => self.error = Some(e),
+        }
+    }
+
+    /// Selects the contour of the live arc `arc` (tests; the tree panel
+    /// does the same on a click).
+    pub fn select_arc(&mut self, arc: crate::simplify::SimpArcId, replace: bool) {
+        if let (Some(ds), Some(level)) = (&self.dataset, &self.level) {
+            TreePanel::select_arc(ds, level, &mut self.selection, arc, self.global_h, replace);
+        }
+    }
+
+    fn spawn_dialog(&self, kind: &'static str) {
+        let tx = self.dialog_tx.clone();
+        let start_dir = self
+            .dataset
+            .as_ref()
+            .and_then(|d| d.path.as_ref())
+            .and_then(|p| p.parent().map(|p| p.to_path_buf()));
+        let stem = self
+            .dataset
+            .as_ref()
+            .map(|d| d.name.split('.').next().unwrap_or("flexiso").to_string())
+            .unwrap_or_else(|| "flexiso".into());
+        // rfd's portal backend is thread-safe; the UI keeps running.
+        let _ = std::thread::Builder::new()
+            .name("flexiso-dialog".into())
+            .spawn(move || {
+                let mut d = rfd::FileDialog::new();
+                if let Some(dir) = start_dir {
+                    d = d.set_directory(dir);
+                }
+                let answer = match kind {
+                    "open" => d.set_title("Open a volume").pick_file().map(Dialog::Open),
+                    "contours" => d
+                        .set_title("Export contours")
+                        .add_filter("mesh", &["ply", "obj", "stl"])
+                        .set_file_name(format!("{stem}_contours.ply"))
+                        .save_file()
+                        .map(Dialog::ExportContours),
+                    "screenshot" => d
+                        .set_title("Save the 3D view")
+                        .add_filter("PNG", &["png"])
+                        .set_file_name(format!("{stem}.png"))
+                        .save_file()
+                        .map(Dialog::Screenshot),
+                    _ => d
+                        .set_title("Export the contour tree")
+                        .add_filter("JSON", &["json"])
+                        .set_file_name(format!("{stem}_tree.json"))
+                        .save_file()
+                        .map(Dialog::TreeJson),
+                };
+                if let Some(a) = answer {
+                    let _ = tx.send(a);
+                }
+            });
+    }
+
+    /// Writes the visible selected contours (or, with none selected, the
+    /// contours at h shown) to a mesh file.
+    pub fn export_contours(&self, path: &std::path::Path) -> anyhow::Result<usize> {
+        let mut meshes: Vec<ContourMesh> = Vec::new();
+        let mut names = Vec::new();
+        for c in &self.selection.contours {
+            if let Some(m) = &c.mesh
+                && self.selection.shown(c)
+            {
+                meshes.push((**m).clone());
+                names.push(format!("contour_{}_h{}", c.id, fmt_value(c.h)));
+            }
+        }
+        if meshes.is_empty() && self.show_all {
+            for (i, m) in self.all.meshes.iter().enumerate() {
+                meshes.push((**m).clone());
+                names.push(format!("component_{i}_h{}", fmt_value(self.global_h)));
+            }
+        }
+        if meshes.is_empty() {
+            anyhow::bail!("no contour to export: select one in the tree first");
+        }
+        crate::contour::export::write_contours(path, &meshes, &names)?;
+        Ok(meshes.len())
+    }
+
+    /// Writes the tree, the collapsed tree and the level shown as JSON.
+    pub fn export_tree_json(&self, path: &std::path::Path) -> anyhow::Result<()> {
+        let (Some(ds), Some(level)) = (&self.dataset, &self.level) else {
+            anyhow::bail!("no dataset loaded");
+        };
+        let mut json = crate::tree::json::tree_json(&ds.tree, &ds.field);
+        if let Some(obj) = json.as_object_mut() {
+            obj.insert(
+                "collapsed".into(),
+                crate::simplify::json::collapsed_tree_json(&ds.collapsed, &ds.tree),
+            );
+            obj.insert(
+                "simplified".into(),
+                crate::simplify::json::simplified_tree_json(level, &ds.tree),
+            );
+        }
+        std::fs::write(path, serde_json::to_string(&json)?)
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+        Ok(())
+    }
+
+    fn handle_dialogs(&mut self) {
+        while let Ok(d) = self.dialog_rx.try_recv() {
+            match d {
+                Dialog::Open(p) => self.open(&p.to_string_lossy()),
+                Dialog::ExportContours(p) => match self.export_contours(&p) {
+                    Ok(n) => self.info = Some(format!("wrote {n} contour(s) to {}", p.display())),
+                    Err(e) => self.error = Some(format!("{e:#}")),
+                },
+                Dialog::TreeJson(p) => match self.export_tree_json(&p) {
+                    Ok(()) => self.info = Some(format!("wrote {}", p.display())),
+                    Err(e) => self.error = Some(format!("{e:#}")),
+                },
+                Dialog::Screenshot(p) => self.pending_screenshot = Some(p),
+            }
+        }
+    }
+
+    fn handle_input(&mut self, ui: &mut egui::Ui) {
+        if ui.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::O)) {
+            self.spawn_dialog("open");
+        }
+        let typing = ui.ctx().egui_wants_keyboard_input();
+        if !typing {
+            if ui.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Delete)) {
+                if let Some(id) = self.selection.active {
+                    self.selection.remove(id);
+                } else if let Some(last) = self.selection.contours.last().map(|c| c.id) {
+                    self.selection.remove(last);
+                }
+            }
+            if ui.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
+                self.selection.clear();
+            }
+        }
+        let dropped: Vec<PathBuf> = ui.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .filter(|p| !p.as_os_str().is_empty())
+                .collect()
+        });
+        if let Some(p) = dropped.first() {
+            self.open(&p.to_string_lossy());
+        }
+    }
+
+    fn update_all_contours(&mut self, pointer_down: bool) {
+        let Some(ds) = &self.dataset else { return };
+        if !self.show_all {
+            return;
+        }
+        let key = (self.global_h.to_bits(), Arc::as_ptr(&ds.field) as usize);
+        // Recompute when the line is let go, not on every drag frame.
+        if self.all.key == Some(key) || pointer_down {
+            return;
+        }
+        let t = Instant::now();
+        self.all.meshes = all_contours(&ds.tree, &ds.field, Isovalue::new(self.global_h))
+            .into_iter()
+            .filter(|m| !m.indices.is_empty())
+            .map(Arc::new)
+            .collect();
+        self.all.millis = t.elapsed().as_secs_f64() * 1e3;
+        self.all.key = Some(key);
+        self.all.version += 1;
+    }
+
+    fn scene(&self) -> Vec<SceneMesh> {
+        let mut scene = Vec::new();
+        for c in &self.selection.contours {
+            if let Some(m) = &c.mesh {
+                scene.push(SceneMesh {
+                    id: c.id,
+                    mesh: Arc::clone(m),
+                    version: c.version,
+                    colour: c.colour,
+                    visible: self.selection.shown(c),
+                    highlighted: self.selection.active == Some(c.id),
+                });
+            }
+        }
+        if self.show_all {
+            let faded = !self.selection.contours.is_empty();
+            for (i, m) in self.all.meshes.iter().enumerate() {
+                let c = PALETTE[i % PALETTE.len()];
+                scene.push(SceneMesh {
+                    id: ALL_CONTOURS_ID + i as u64,
+                    mesh: Arc::clone(m),
+                    version: self.all.version,
+                    colour: if faded { c.gamma_multiply(0.35) } else { c },
+                    visible: true,
+                    highlighted: false,
+                });
+            }
+        }
+        scene
+    }
+
+    fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open…  (Ctrl+O)").clicked() {
+                    self.spawn_dialog("open");
+                }
+                if ui.button("Open the built-in dataset").clicked() {
+                    self.open("synthetic");
+                }
+                ui.separator();
+                if ui.button("Export contours (PLY/OBJ/STL)…").clicked() {
+                    self.spawn_dialog("contours");
+                }
+                if ui.button("Save 3D view as PNG…").clicked() {
+                    self.spawn_dialog("screenshot");
+                }
+                if ui.button("Export tree as JSON…").clicked() {
+                    self.spawn_dialog("tree");
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.separator();
+            let mut measure = self.measure;
+            egui::ComboBox::from_label("measure")
+                .selected_text(measure.name())
+                .show_ui(ui, |ui| {
+                    for m in Measure::ALL {
+                        ui.selectable_value(&mut measure, m, m.name());
+                    }
+                });
+            if measure != self.measure {
+                self.measure = measure;
+                if let Some(ds) = &self.dataset {
+                    self.start(Request::Resimplify(Box::new(ds.clone())));
+                }
+            }
+            ui.separator();
+            if let Some(ds) = &self.dataset {
+                let (lo, hi) = ds.field.range();
+                ui.add(
+                    egui::Slider::new(&mut self.global_h, lo..=hi)
+                        .text("isovalue")
+                        .custom_formatter(|v, _| fmt_value(v)),
+                );
+                let r = ui.checkbox(&mut self.show_all, "all contours at h");
+                self.all_checkbox = Some(r.rect);
+            }
+        });
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal_wrapped(|ui| {
+            if let Some(r) = self.pipeline.running() {
+                let (stage, f) = r.progress.get();
+                ui.add(egui::ProgressBar::new(f).desired_width(220.0).text(format!(
+                    "{}: {stage} {:.0}%",
+                    r.what,
+                    100.0 * f
+                )));
+                ui.label(format!("{:.1} s", r.started.elapsed().as_secs_f64()));
+                if ui.button("Cancel").clicked() {
+                    self.pipeline.cancel();
+                }
+                ui.separator();
+            }
+            match (&self.dataset, &self.level) {
+                (Some(ds), Some(level)) => {
+                    let [x, y, z] = ds.field.dims();
+                    let (lo, hi) = ds.field.range();
+                    let t = ds.times;
+                    ui.label(RichText::new(&ds.name).strong());
+                    ui.label(format!(
+                        "{x}×{y}×{z} {}  values {} .. {}",
+                        ds.field.values().type_name(),
+                        fmt_value(lo),
+                        fmt_value(hi)
+                    ));
+                    ui.separator();
+                    ui.label(format!(
+                        "superarcs {}  collapsed {}  shown {}",
+                        ds.tree.arcs().len(),
+                        ds.sim.base_arcs(),
+                        level.num_arcs()
+                    ));
+                    ui.separator();
+                    ui.label(format!(
+                        "read {:.2} s  tree {:.2} s  simplify {:.2} s",
+                        t.load.as_secs_f64(),
+                        t.tree.as_secs_f64(),
+                        (t.simplify + t.layout).as_secs_f64()
+                    ));
+                    ui.separator();
+                    ui.label(format!(
+                        "ui {:.1} ms  3D {:.1} ms",
+                        self.ui_ms, self.view3d.last_render_ms
+                    ));
+                    if self.show_all {
+                        ui.label(format!(
+                            "{} contours at h ({:.0} ms)",
+                            self.all.meshes.len(),
+                            self.all.millis
+                        ));
+                    }
+                }
+                _ => {
+                    if self.pipeline.running().is_none() {
+                        ui.label("no dataset: File > Open (Ctrl+O) or drop a file");
+                    }
+                }
+            }
+        });
+    }
+
+    fn selection_list(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Contours");
+        if self.selection.contours.is_empty() {
+            ui.label("Click an arc in the tree (shift-click adds), or a surface.");
+            ui.label("Drag a marker to move its isovalue.");
+            return;
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Clear (Esc)").clicked() {
+                self.selection.clear();
+            }
+            if self.selection.isolated.is_some() && ui.button("Show all").clicked() {
+                self.selection.isolated = None;
+            }
+        });
+        let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
+        let mut remove = None;
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            for c in &mut self.selection.contours {
+                let active = self.selection.active == Some(c.id);
+                egui::Frame::group(ui.style())
+                    .stroke(egui::Stroke::new(
+                        if active { 2.0 } else { 1.0 },
+                        if active {
+                            c.colour
+                        } else {
+                            Color32::from_gray(70)
+                        },
+                    ))
+                    .show(ui, |ui| {
+                        ui.horizontal(|ui| {
+                            ui.color_edit_button_srgba(&mut c.colour);
+                            let arc = tree.as_ref().map(|t| {
+                                let a = t.arc(c.superarc);
+                                format!("{}:{}", t.node(a.upper).vertex, t.node(a.lower).vertex)
+                            });
+                            if ui
+                                .selectable_label(
+                                    active,
+                                    format!("#{}  h = {}", c.id, fmt_value(c.h)),
+                                )
+                                .on_hover_text(format!(
+                                    "superarc {} (vertices upper:lower)",
+                                    arc.unwrap_or_default()
+                                ))
+                                .clicked()
+                            {
+                                self.selection.active = Some(c.id);
+                            }
+                        });
+                        ui.horizontal(|ui| {
+                            ui.checkbox(&mut c.visible, "visible");
+                            let iso = self.selection.isolated == Some(c.id);
+                            if ui.selectable_label(iso, "isolate").clicked() {
+                                self.selection.isolated = if iso { None } else { Some(c.id) };
+                            }
+                            if ui.button("delete").clicked() {
+                                remove = Some(c.id);
+                            }
+                        });
+                        match &c.topology {
+                            Some(t) => {
+                                ui.label(format!(
+                                    "{} triangles, area {}",
+                                    t.triangles,
+                                    fmt_value(t.area)
+                                ));
+                                ui.label(format!(
+                                    "{}  genus {}{}",
+                                    if t.is_closed() {
+                                        format!("volume {}", fmt_value(t.volume))
+                                    } else {
+                                        format!("open ({} boundary loops)", t.boundary_loops)
+                                    },
+                                    t.genus(),
+                                    if t.components > 1 {
+                                        format!(", {} components", t.components)
+                                    } else {
+                                        String::new()
+                                    }
+                                ));
+                                ui.label(
+                                    RichText::new(format!("extracted in {:.1} ms", c.extract_ms))
+                                        .weak(),
+                                );
+                            }
+                            None => {
+                                ui.label("no contour at this value");
+                            }
+                        }
+                    });
+            }
+        });
+        if let Some(id) = remove {
+            self.selection.remove(id);
+        }
+    }
+
+    fn save_screenshot(&mut self, rs: Option<&egui_wgpu::RenderState>) {
+        let Some(path) = self.pending_screenshot.take() else {
+            return;
+        };
+        let result = rs
+            .ok_or_else(|| anyhow::anyhow!("no GPU render state"))
+            .and_then(|rs| self.view3d.read_image(rs))
+            .and_then(|img| {
+                img.save(&path)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+            });
+        match result {
+            Ok(()) => self.info = Some(format!("saved {}", path.display())),
+            Err(e) => self.error = Some(format!("screenshot: {e:#}")),
+        }
+    }
+
+    /// Saves the 3D view at the next frame (tests, scripts).
+    pub fn request_screenshot(&mut self, path: PathBuf) {
+        self.pending_screenshot = Some(path);
+    }
+}
+
+impl eframe::App for FlexisoApp {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        let t0 = Instant::now();
+        if let Some(r) = self.pipeline.poll() {
+            self.accept(r);
+        }
+        self.handle_dialogs();
+        self.handle_input(ui);
+        let rs = frame.wgpu_render_state().cloned();
+        let pointer_down = ui.input(|i| i.pointer.any_down());
+        self.update_all_contours(pointer_down);
+
+        egui::Panel::top("menu").show(ui, |ui| {
+            self.menu_bar(ui);
+            if let Some(e) = self.error.clone() {
+                ui.horizontal(|ui| {
+                    ui.label(RichText::new(format!("⚠ {e}")).color(Color32::LIGHT_RED));
+                    if ui.small_button("dismiss").clicked() {
+                        self.error = None;
+                    }
+                });
+            } else if let Some(i) = self.info.clone() {
+                ui.horizontal(|ui| {
+                    ui.label(RichText::new(i).weak());
+                    if ui.small_button("ok").clicked() {
+                        self.info = None;
+                    }
+                });
+            }
+        });
+        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::left("tree")
+            .resizable(true)
+            .default_size(560.0)
+            .min_size(260.0)
+            .show(ui, |ui| {
+                let (Some(ds), Some(level)) = (&self.dataset, &mut self.level) else {
+                    ui.label("Loading…");
+                    return;
+                };
+                let curve_h = 210.0f32.min(ui.available_height() * 0.4);
+                let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
+                let w = ui.available_width();
+                ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
+                    self.tree_panel
+                        .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
+                });
+                ui.separator();
+                self.curve_panel.ui(ui, level);
+            });
+        egui::Panel::right("selection")
+            .resizable(true)
+            .default_size(250.0)
+            .show(ui, |ui| self.selection_list(ui));
+        let mut view_rect = egui::Rect::NOTHING;
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| {
+                view_rect = ui.available_rect_before_wrap();
+                let scene = self.scene();
+                let ev = self.view3d.ui(ui, rs.as_ref(), &scene);
+                if let Some((id, shift)) = ev.picked {
+                    if id >= ALL_CONTOURS_ID {
+                        let i = (id - ALL_CONTOURS_ID) as usize;
+                        if let (Some(ds), Some(m)) = (&self.dataset, self.all.meshes.get(i)) {
+                            self.selection
+                                .add(&ds.field, &ds.tree, m.arc, self.global_h, !shift);
+                        }
+                    } else {
+                        self.selection.active = Some(id);
+                    }
+                }
+            });
+        self.save_screenshot(rs.as_ref());
+        self.write_ui_dump(view_rect);
+
+        if self.pipeline.running().is_some() {
+            // Animate the progress bar.
+            ui.ctx().request_repaint_after(Duration::from_millis(50));
+        }
+        self.ui_ms = t0.elapsed().as_secs_f64() * 1e3;
+        if let Some(log) = &mut self.frame_log {
+            let now = Instant::now();
+            let frame_ms = log
+                .last
+                .map(|l| (now - l).as_secs_f64() * 1e3)
+                .unwrap_or(0.0);
+            log.last = Some(now);
+            let stage = self
+                .pipeline
+                .running()
+                .map(|r| r.progress.get().0)
+                .unwrap_or_else(|| "idle".into());
+            let _ = writeln!(
+                log.file,
+                "{:.3}\t{frame_ms:.2}\t{:.2}\t{stage}",
+                (now - log.start).as_secs_f64(),
+                self.ui_ms
+            );
+            let _ = log.file.flush();
+        }
+    }
+}

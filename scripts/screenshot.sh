@@ -1,0 +1,129 @@
+#!/usr/bin/env bash
+# Starts the real explorer under Xvfb with software Vulkan (Mesa lavapipe),
+# clicks and drags in it with xdotool like a user, and saves screenshots:
+#
+#   01_opened.png     the tree of the dataset, nothing selected
+#   02_selected.png   two contours selected (click, shift-click on arcs)
+#   03_dragged.png    the first contour's marker dragged up its arc
+#   04_simplified.png the level moved on the simplification curve
+#   05_all.png        "all contours at h" switched on
+#
+# Usage: scripts/screenshot.sh [OUT_DIR] (default out/); FLEXISO_INPUT picks
+# the volume (default synthetic:96). Exits non-zero when the window does
+# not show, the dataset does not load, or a screenshot is blank.
+# Needs: xvfb, mesa-vulkan-drivers, xdotool, imagemagick (see .ci/run).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+OUT="${1:-out}"
+INPUT="${FLEXISO_INPUT:-synthetic:96}"
+mkdir -p "$OUT"
+BIN=target/release/flexiso
+if [ ! -x "$BIN" ] || [ -n "$(find src -newer "$BIN" -name '*.rs' | head -1)" ]; then
+  cargo build --release
+fi
+
+DISP=":${FLEXISO_DISPLAY:-97}"
+Xvfb "$DISP" -screen 0 1600x1000x24 -nolisten tcp >"$OUT/xvfb.log" 2>&1 &
+XVFB_PID=$!
+APP_PID=""
+cleanup() {
+  if [ -n "$APP_PID" ]; then kill "$APP_PID" 2>/dev/null || true; fi
+  kill "$XVFB_PID" 2>/dev/null || true
+}
+trap cleanup EXIT
+export DISPLAY="$DISP"
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
+sleep 1
+
+DUMP="$OUT/ui.txt"
+rm -f "$DUMP"
+"$BIN" open "$INPUT" --size 1600x1000 --frame-log "$OUT/frames.tsv" --ui-dump "$DUMP" \
+  >"$OUT/app.log" 2>&1 &
+APP_PID=$!
+
+fail() {
+  echo "screenshot.sh: $*" >&2
+  echo "--- app.log:" >&2
+  cat "$OUT/app.log" >&2 || true
+  exit 1
+}
+alive() { kill -0 "$APP_PID" 2>/dev/null; }
+
+# The window must show.
+WID=""
+for _ in $(seq 1 120); do
+  alive || fail "the program exited before showing a window"
+  WID=$(xdotool search --onlyvisible --name '^flexiso' 2>/dev/null | head -1 || true)
+  [ -n "$WID" ] && break
+  sleep 0.5
+done
+[ -n "$WID" ] || fail "no window after 60 s"
+echo "window $WID"
+
+# The dataset must load (the tree panel then dumps its arcs).
+for _ in $(seq 1 600); do
+  alive || fail "the program exited while loading"
+  grep -q "ready in" "$OUT/app.log" && grep -q '^arc ' "$DUMP" 2>/dev/null && break
+  sleep 0.5
+done
+grep -q '^arc ' "$DUMP" 2>/dev/null || fail "the dataset did not load in 300 s"
+sleep 2
+
+shot() {
+  alive || fail "the program died before $1"
+  import -window root "$OUT/$1"
+  local colours
+  colours=$(identify -format '%k' "$OUT/$1")
+  [ "$colours" -gt 20 ] || fail "$1 looks blank ($colours colours)"
+  echo "saved $OUT/$1 ($colours colours)"
+}
+click() { xdotool mousemove --window "$WID" "$1" "$2" sleep 0.2 click 1; sleep "${3:-2}"; }
+# drag X0 Y0 X1 Y1 in small steps, so egui sees the motion.
+drag() {
+  local x0=$1 y0=$2 x1=$3 y1=$4 n=12 i
+  xdotool mousemove --window "$WID" "$x0" "$y0" sleep 0.2 mousedown 1 sleep 0.2
+  for i in $(seq 1 $n); do
+    xdotool mousemove --window "$WID" $((x0 + (x1 - x0) * i / n)) $((y0 + (y1 - y0) * i / n)) sleep 0.15
+  done
+  xdotool mouseup 1
+  sleep 2
+}
+rect() { awk -v k="$1" '$1 == k { print $2, $3, $4, $5; exit }' "$DUMP"; }
+# The arc whose midpoint is nearest to (FX, FY) as fractions of the tree rect.
+arc_near() {
+  read -r tx0 ty0 tx1 ty1 <<<"$(rect tree)"
+  awk -v px="$(( tx0 + (tx1 - tx0) * $1 / 100 ))" -v py="$(( ty0 + (ty1 - ty0) * $2 / 100 ))" \
+    '$1 == "arc" { d = ($3 - px)^2 + ($4 - py)^2; if (best == "" || d < best) { best = d; x = $3; y = $4 } }
+     END { print x, y }' "$DUMP"
+}
+
+shot 01_opened.png
+
+read -r ax ay <<<"$(arc_near 50 50)"
+click "$ax" "$ay"
+read -r bx by <<<"$(arc_near 30 30)"
+xdotool mousemove --window "$WID" "$bx" "$by" sleep 0.2 keydown shift click 1 keyup shift
+sleep 2
+grep -q '^contours [1-9]' "$DUMP" || fail "clicking arcs selected nothing"
+shot 02_selected.png
+
+read -r mx my <<<"$(awk '$1 == "marker" { print $3, $4; exit }' "$DUMP")"
+if [ -n "${mx:-}" ]; then
+  drag "$mx" "$my" "$mx" $((my - 60))
+  shot 03_dragged.png
+fi
+
+read -r cx0 cy0 cx1 cy1 <<<"$(rect curve)"
+cy=$(( (cy0 + cy1) / 2 ))
+drag $((cx0 + (cx1 - cx0) * 30 / 100)) "$cy" $((cx0 + (cx1 - cx0) * 60 / 100)) "$cy"
+shot 04_simplified.png
+
+read -r kx0 ky0 kx1 ky1 <<<"$(rect allbox)"
+if [ -n "${kx0:-}" ]; then
+  click $(( kx0 + 8 )) $(( (ky0 + ky1) / 2 )) 4
+  shot 05_all.png
+fi
+
+alive || fail "the program died during the interactions"
+echo "frame log: $OUT/frames.tsv"

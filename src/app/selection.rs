@@ -1,0 +1,183 @@
+//! The selection: the contours the user picked, each the contour of one
+//! superarc at one isovalue, with its mesh and measurements. Panels talk
+//! through this state: the tree panel adds contours and moves their
+//! isovalues, the 3D view draws them, the list edits them.
+//!
+//! A contour is stored as (original superarc, isovalue): that pair names
+//! it at every level of simplification (an arc of a simplified tree is a
+//! chain of superarcs, and its contour at h is the contour of the one
+//! superarc of the chain spanning h).
+
+use std::sync::Arc;
+
+use egui::Color32;
+
+use crate::contour::{ContourFollower, ContourMesh, Isovalue, MeshTopology, path_seed};
+use crate::field::ScalarField;
+use crate::tree::{ArcId, ContourTree};
+
+/// Distinct colours for contours (sRGB).
+pub const PALETTE: [Color32; 10] = [
+    Color32::from_rgb(228, 115, 51),
+    Color32::from_rgb(77, 153, 217),
+    Color32::from_rgb(115, 191, 89),
+    Color32::from_rgb(217, 89, 140),
+    Color32::from_rgb(230, 191, 64),
+    Color32::from_rgb(140, 115, 204),
+    Color32::from_rgb(89, 191, 191),
+    Color32::from_rgb(191, 140, 102),
+    Color32::from_rgb(170, 170, 80),
+    Color32::from_rgb(200, 120, 220),
+];
+
+/// One selected contour.
+#[derive(Clone, Debug)]
+pub struct Contour {
+    /// Stable id (also the renderer's mesh id).
+    pub id: u64,
+    /// The superarc whose contour this is.
+    pub superarc: ArcId,
+    /// The isovalue (the level set at `h + ε`, see [`Isovalue`]).
+    pub h: f64,
+    /// Colour in the 3D view and on the tree.
+    pub colour: Color32,
+    /// Drawn in the 3D view.
+    pub visible: bool,
+    /// The extracted mesh (None until extracted, or when the superarc
+    /// does not span h).
+    pub mesh: Option<Arc<ContourMesh>>,
+    /// Its measurements.
+    pub topology: Option<MeshTopology>,
+    /// Bumped whenever the mesh changes (the 3D view re-uploads).
+    pub version: u64,
+    /// Milliseconds the last extraction took.
+    pub extract_ms: f64,
+}
+
+/// The selected contours and the global isovalue.
+#[derive(Clone, Debug, Default)]
+pub struct Selection {
+    /// Selected contours, in the order they were picked.
+    pub contours: Vec<Contour>,
+    /// The contour last picked or dragged (shown highlighted).
+    pub active: Option<u64>,
+    /// Only this contour is drawn, when set.
+    pub isolated: Option<u64>,
+    next_id: u64,
+}
+
+impl Selection {
+    /// The contour with this id.
+    pub fn get(&self, id: u64) -> Option<&Contour> {
+        self.contours.iter().find(|c| c.id == id)
+    }
+
+    /// The contour with this id, mutably.
+    pub fn get_mut(&mut self, id: u64) -> Option<&mut Contour> {
+        self.contours.iter_mut().find(|c| c.id == id)
+    }
+
+    /// Adds the contour of `superarc` at `h`, extracted at once; returns
+    /// its id. With `replace`, the previous selection is cleared first.
+    pub fn add(
+        &mut self,
+        field: &ScalarField,
+        tree: &ContourTree,
+        superarc: ArcId,
+        h: f64,
+        replace: bool,
+    ) -> u64 {
+        if replace {
+            self.clear();
+        }
+        // The same contour twice would only hide itself.
+        if let Some(c) = self
+            .contours
+            .iter()
+            .find(|c| c.superarc == superarc && c.h == h)
+        {
+            let id = c.id;
+            self.active = Some(id);
+            return id;
+        }
+        let id = self.next_id;
+        self.next_id += 1;
+        let used: Vec<Color32> = self.contours.iter().map(|c| c.colour).collect();
+        let colour = PALETTE
+            .iter()
+            .copied()
+            .find(|c| !used.contains(c))
+            .unwrap_or(PALETTE[id as usize % PALETTE.len()]);
+        let mut c = Contour {
+            id,
+            superarc,
+            h,
+            colour,
+            visible: true,
+            mesh: None,
+            topology: None,
+            version: 0,
+            extract_ms: 0.0,
+        };
+        extract(field, tree, &mut c);
+        self.contours.push(c);
+        self.active = Some(id);
+        id
+    }
+
+    /// Moves contour `id` to `(superarc, h)` and re-extracts it.
+    pub fn move_to(
+        &mut self,
+        field: &ScalarField,
+        tree: &ContourTree,
+        id: u64,
+        superarc: ArcId,
+        h: f64,
+    ) {
+        if let Some(c) = self.get_mut(id)
+            && (c.superarc != superarc || c.h != h)
+        {
+            c.superarc = superarc;
+            c.h = h;
+            extract(field, tree, c);
+        }
+    }
+
+    /// Removes contour `id`.
+    pub fn remove(&mut self, id: u64) {
+        self.contours.retain(|c| c.id != id);
+        if self.active == Some(id) {
+            self.active = None;
+        }
+        if self.isolated == Some(id) {
+            self.isolated = None;
+        }
+    }
+
+    /// Removes every contour.
+    pub fn clear(&mut self) {
+        self.contours.clear();
+        self.active = None;
+        self.isolated = None;
+    }
+
+    /// True when contour `c` is drawn (visible, and not hidden by an
+    /// isolated other one).
+    pub fn shown(&self, c: &Contour) -> bool {
+        c.visible && self.isolated.is_none_or(|i| i == c.id)
+    }
+}
+
+/// Extracts the contour of `c.superarc` at `c.h` into `c`.
+pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
+    let t = std::time::Instant::now();
+    let iso = Isovalue::new(c.h);
+    let mesh = path_seed(tree, field, c.superarc, iso)
+        .map(|seed| ContourFollower::new(field).follow(&seed, iso));
+    c.topology = mesh
+        .as_ref()
+        .map(|m| MeshTopology::of(&m.positions, &m.indices));
+    c.mesh = mesh.map(Arc::new);
+    c.version += 1;
+    c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
+}

@@ -1,0 +1,231 @@
+//! The 3D view: the contours drawn by [`crate::render::Renderer`] into its
+//! own texture, shown as an egui image. Orbit camera: drag rotates, wheel
+//! zooms, right or middle drag pans, double-click fits the volume. A click
+//! on a surface picks it. Meshes are uploaded only when their version
+//! changes; styles cost a uniform write; a frame whose camera, size and
+//! scene are unchanged is not re-rendered.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use egui::{Color32, Sense};
+
+use crate::contour::ContourMesh;
+use crate::render::{Camera, EguiTexture, Renderer};
+
+/// One mesh the view should draw.
+pub struct SceneMesh {
+    /// Renderer id.
+    pub id: u64,
+    /// Geometry (uploaded when `version` changes).
+    pub mesh: Arc<ContourMesh>,
+    /// Bumped when the geometry changes.
+    pub version: u64,
+    /// Colour.
+    pub colour: Color32,
+    /// Drawn at all.
+    pub visible: bool,
+    /// Drawn with the selection rim.
+    pub highlighted: bool,
+}
+
+/// What happened in the view this frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ViewEvents {
+    /// A surface was clicked: its id; `shift` held.
+    pub picked: Option<(u64, bool)>,
+    /// The background was clicked.
+    pub clicked_empty: bool,
+}
+
+/// The 3D view's state.
+pub struct View3d {
+    renderer: Option<Renderer>,
+    /// The orbit camera.
+    pub camera: Camera,
+    texture: EguiTexture,
+    /// Mesh id → uploaded version.
+    uploaded: HashMap<u64, u64>,
+    bounds: Option<([f32; 3], [f32; 3])>,
+    /// Why there is no view (no wgpu, upload error), shown instead.
+    pub problem: Option<String>,
+    /// Milliseconds of the last render call (software rendering is slow).
+    pub last_render_ms: f64,
+    /// Renders done (for tests and the frame log).
+    pub renders: u64,
+}
+
+impl Default for View3d {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn rgba(c: Color32) -> [f32; 4] {
+    c.to_normalized_gamma_f32()
+}
+
+impl View3d {
+    /// An empty view.
+    pub fn new() -> Self {
+        Self {
+            renderer: None,
+            camera: Camera::default(),
+            texture: EguiTexture::new(),
+            uploaded: HashMap::new(),
+            bounds: None,
+            problem: None,
+            last_render_ms: 0.0,
+            renders: 0,
+        }
+    }
+
+    /// Sets the volume's box (drawn faint) and fits the camera to it.
+    pub fn set_bounds(&mut self, min: [f32; 3], max: [f32; 3]) {
+        self.bounds = Some((min, max));
+        self.camera.fit(min, max);
+        if let Some(r) = &mut self.renderer {
+            r.set_bounds(min, max);
+        }
+    }
+
+    /// Ids of the meshes the renderer holds (tests).
+    pub fn mesh_ids(&self) -> Vec<u64> {
+        self.renderer
+            .as_ref()
+            .map(|r| r.mesh_ids())
+            .unwrap_or_default()
+    }
+
+    /// The renderer, once created (tests, screenshots).
+    pub fn renderer(&self) -> Option<&Renderer> {
+        self.renderer.as_ref()
+    }
+
+    /// Draws the view into `ui`'s remaining space.
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        rs: Option<&egui_wgpu::RenderState>,
+        scene: &[SceneMesh],
+    ) -> ViewEvents {
+        let mut events = ViewEvents::default();
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let Some(rs) = rs else {
+            ui.painter().text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "3D view unavailable: no wgpu render state",
+                egui::FontId::proportional(14.0),
+                Color32::GRAY,
+            );
+            return events;
+        };
+        let renderer = self.renderer.get_or_insert_with(|| {
+            let mut r = Renderer::new(&rs.device, Renderer::sample_count_for(&rs.adapter));
+            if let Some((lo, hi)) = self.bounds {
+                r.set_bounds(lo, hi);
+            }
+            r
+        });
+
+        // Sync meshes: remove the gone, upload the changed, restyle all.
+        let wanted: HashMap<u64, &SceneMesh> = scene.iter().map(|m| (m.id, m)).collect();
+        for id in renderer.mesh_ids() {
+            if !wanted.contains_key(&id) {
+                renderer.remove_mesh(id);
+                self.uploaded.remove(&id);
+            }
+        }
+        for m in scene {
+            if self.uploaded.get(&m.id) != Some(&m.version) {
+                let r = renderer.set_mesh(
+                    &rs.device,
+                    &rs.queue,
+                    m.id,
+                    &m.mesh.positions,
+                    &m.mesh.normals,
+                    &m.mesh.indices,
+                );
+                match r {
+                    Ok(()) => {
+                        self.uploaded.insert(m.id, m.version);
+                    }
+                    Err(e) => self.problem = Some(e.to_string()),
+                }
+            }
+            renderer.set_style(m.id, rgba(m.colour), m.visible, m.highlighted);
+        }
+
+        // Camera.
+        if response.dragged_by(egui::PointerButton::Primary) {
+            let d = response.drag_delta();
+            self.camera.orbit(-0.01 * d.x, 0.01 * d.y);
+        }
+        if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+        {
+            let d = response.drag_delta();
+            self.camera.pan(d.x, d.y, rect.height());
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.camera.zoom((-0.002 * scroll).exp());
+            }
+        }
+        if response.double_clicked() {
+            if let Some((lo, hi)) = self.bounds {
+                self.camera.fit(lo, hi);
+            }
+        } else if response.clicked()
+            && let Some(p) = response.interact_pointer_pos()
+        {
+            let local = p - rect.min;
+            match renderer.pick(&self.camera, rect.width(), rect.height(), local.x, local.y) {
+                Some((id, _)) => events.picked = Some((id, ui.input(|i| i.modifiers.shift))),
+                None => events.clicked_empty = true,
+            }
+        }
+
+        let px = (rect.size() * ui.pixels_per_point()).round();
+        let (w, h) = (px.x.max(1.0) as u32, px.y.max(1.0) as u32);
+        if !renderer.is_current(&self.camera, w, h) {
+            let t = std::time::Instant::now();
+            renderer.render(&rs.device, &rs.queue, &self.camera, w, h);
+            self.last_render_ms = t.elapsed().as_secs_f64() * 1e3;
+            self.renders += 1;
+        }
+        let id = self
+            .texture
+            .update(&mut rs.renderer.write(), &rs.device, renderer);
+        if let Some(id) = id {
+            ui.painter().image(
+                id,
+                rect,
+                egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                Color32::WHITE,
+            );
+        }
+        if let Some(p) = &self.problem {
+            ui.painter().text(
+                rect.left_bottom() + egui::vec2(8.0, -8.0),
+                egui::Align2::LEFT_BOTTOM,
+                p,
+                egui::FontId::proportional(12.0),
+                Color32::LIGHT_RED,
+            );
+        }
+        events
+    }
+
+    /// The last rendered image (for the screenshot export).
+    pub fn read_image(&self, rs: &egui_wgpu::RenderState) -> anyhow::Result<image::RgbaImage> {
+        let r = self
+            .renderer
+            .as_ref()
+            .ok_or_else(|| anyhow::anyhow!("the 3D view has not been drawn yet"))?;
+        Ok(r.read_image(&rs.device, &rs.queue)?)
+    }
+}
