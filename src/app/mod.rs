@@ -784,7 +784,7 @@ impl eframe::App for FlexisoApp {
             self.menu_bar(ui);
             if let Some(e) = self.error.clone() {
                 ui.horizontal(|ui| {
-                    ui.label(RichText::new(format!("⚠ {e}")).color(Color32::LIGHT_RED));
+                    ui.label(RichText::new(format!("Error: {e}")).color(Color32::LIGHT_RED));
                     if ui.small_button("dismiss").clicked() {
                         self.error = None;
                     }

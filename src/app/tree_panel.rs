@@ -196,6 +196,8 @@ impl TreePanel {
         let response = ui
             .allocate_rect(rect, Sense::click_and_drag())
             .on_hover_cursor(egui::CursorIcon::Crosshair);
+        response
+            .widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "contour tree"));
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
         let plot = Rect::from_min_max(rect.min + vec2(60.0, 14.0), rect.max - vec2(14.0, 14.0));

@@ -112,6 +112,7 @@ impl View3d {
         let mut events = ViewEvents::default();
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "3D view"));
         let Some(rs) = rs else {
             ui.painter().text(
                 rect.center(),

@@ -1,0 +1,257 @@
+//! The explorer driven like a user would, headless (egui_kittest): clicks
+//! and drags at screen positions, then checks on the app's state and on
+//! what the panels drew. With an adapter (wgpu, e.g. Mesa's lavapipe) the
+//! 3D view renders for real; without one these tests still run the UI but
+//! skip the renderer checks, unless `FLEXISO_REQUIRE_GPU=1`.
+
+use egui::{Pos2, pos2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use flexiso::app::FlexisoApp;
+use flexiso::field::synthetic::Synthetic;
+use flexiso::simplify::SimpArcId;
+
+fn gpu_available() -> bool {
+    match flexiso::render::Gpu::new() {
+        Ok(_) => true,
+        Err(e) => {
+            assert!(
+                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
+                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
+            );
+            eprintln!("no adapter ({e}): the 3D view is not rendered");
+            false
+        }
+    }
+}
+
+/// The explorer on a small synthetic volume, pipeline already run, in a
+/// 1200×800 window; the second value says whether the 3D view renders.
+fn explorer() -> (Harness<'static, FlexisoApp>, bool) {
+    let field = Synthetic::cube(40).generate();
+    let gpu = gpu_available();
+    let builder = Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .with_pixels_per_point(1.0);
+    let builder = if gpu { builder.wgpu() } else { builder };
+    let mut h = builder.build_eframe(move |_cc| FlexisoApp::new_for_test(field));
+    h.run_steps(3);
+    assert!(h.state().dataset().is_some(), "the test dataset loaded");
+    (h, gpu)
+}
+
+/// A click: press and release at `p` (after moving there).
+fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
+    h.hover_at(p);
+    h.run_steps(1);
+    h.drag_at(p);
+    h.run_steps(1);
+    h.drop_at(p);
+    h.run_steps(3);
+}
+
+/// A drag from `a` to `b` in small moves.
+fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
+    h.hover_at(a);
+    h.run_steps(1);
+    h.drag_at(a);
+    h.run_steps(1);
+    for i in 1..=10 {
+        h.hover_at(a + (b - a) * (i as f32 / 10.0));
+        h.run_steps(1);
+    }
+    h.drop_at(b);
+    h.run_steps(3);
+}
+
+/// The live arc spanning the widest range of values, and where the tree
+/// panel drew its midpoint.
+fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimpArcId, Pos2) {
+    let app = h.state();
+    let level = app.level().expect("level");
+    let sim = level.simplification();
+    let span = |a: SimpArcId| {
+        let la = level.arc(a);
+        sim.node_value(la.upper) - sim.node_value(la.lower)
+    };
+    app.tree_panel()
+        .drawn
+        .arcs
+        .iter()
+        .copied()
+        .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
+        .expect("the tree panel drew arcs")
+}
+
+#[test]
+fn clicking_an_arc_selects_its_contour_and_a_mesh_appears_in_the_scene() {
+    let (mut h, gpu) = explorer();
+    assert!(h.state().selection().contours.is_empty());
+    let (arc, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let app = h.state();
+    let sel = &app.selection().contours;
+    assert_eq!(sel.len(), 1, "one contour selected by the click");
+    let c = &sel[0];
+    assert_eq!(
+        app.tree_panel().live_arc_of(c.superarc),
+        Some(arc),
+        "the contour is on the clicked arc"
+    );
+    let mesh = c.mesh.as_ref().expect("the contour was extracted");
+    assert!(mesh.num_triangles() > 0, "the contour has triangles");
+    assert_eq!(
+        app.tree_panel().drawn.markers.len(),
+        1,
+        "a marker sits on the arc"
+    );
+    if gpu {
+        assert!(
+            app.view3d().mesh_ids().contains(&c.id),
+            "the 3D view holds the contour's mesh: {:?}",
+            app.view3d().mesh_ids()
+        );
+        assert!(app.view3d().renders > 0, "the 3D view rendered");
+    }
+
+    // Escape clears the selection, and the mesh leaves the scene.
+    h.key_press(egui::Key::Escape);
+    h.run_steps(3);
+    assert!(h.state().selection().contours.is_empty());
+    if gpu {
+        assert!(h.state().view3d().mesh_ids().is_empty());
+    }
+}
+
+#[test]
+fn shift_click_adds_a_second_contour_and_delete_removes_one() {
+    let (mut h, _) = explorer();
+    let (_, p) = tallest_arc(&h);
+    click(&mut h, p);
+    // Another arc, far from the first one's midpoint.
+    let other = h
+        .state()
+        .tree_panel()
+        .drawn
+        .arcs
+        .iter()
+        .copied()
+        .filter(|(_, q)| q.distance(p) > 40.0)
+        .max_by(|a, b| a.1.y.total_cmp(&b.1.y))
+        .expect("another arc");
+    h.hover_at(other.1);
+    h.run_steps(1);
+    h.event_modifiers(
+        egui::Event::PointerButton {
+            pos: other.1,
+            button: egui::PointerButton::Primary,
+            pressed: true,
+            modifiers: egui::Modifiers::SHIFT,
+        },
+        egui::Modifiers::SHIFT,
+    );
+    h.run_steps(1);
+    h.event_modifiers(
+        egui::Event::PointerButton {
+            pos: other.1,
+            button: egui::PointerButton::Primary,
+            pressed: false,
+            modifiers: egui::Modifiers::SHIFT,
+        },
+        egui::Modifiers::SHIFT,
+    );
+    h.run_steps(3);
+    assert_eq!(h.state().selection().contours.len(), 2, "shift-click adds");
+    h.key_press(egui::Key::Delete);
+    h.run_steps(2);
+    assert_eq!(
+        h.state().selection().contours.len(),
+        1,
+        "Delete removes one"
+    );
+}
+
+#[test]
+fn dragging_a_marker_changes_the_contours_isovalue() {
+    let (mut h, gpu) = explorer();
+    let (arc, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let (id, h0, v0, marker) = {
+        let app = h.state();
+        let c = &app.selection().contours[0];
+        let (mid, pos) = app.tree_panel().drawn.markers[0];
+        assert_eq!(mid, c.id);
+        (c.id, c.h, c.version, pos)
+    };
+    // Up the screen is up in value.
+    drag(&mut h, marker, marker - egui::vec2(0.0, 40.0));
+    let app = h.state();
+    let c = app.selection().get(id).expect("still selected");
+    assert!(c.h > h0, "dragging up raised the isovalue: {h0} -> {}", c.h);
+    assert!(c.version > v0, "the contour was re-extracted");
+    let level = app.level().expect("level");
+    let la = level.arc(arc);
+    let sim = level.simplification();
+    assert!(
+        c.h >= sim.node_value(la.lower) && c.h < sim.node_value(la.upper),
+        "the contour stays on its arc"
+    );
+    assert!(c.mesh.as_ref().is_some_and(|m| m.num_triangles() > 0));
+    let (_, moved) = app.tree_panel().drawn.markers[0];
+    assert!(
+        moved.y < marker.y - 5.0,
+        "the marker moved up with the drag"
+    );
+    if gpu {
+        assert!(app.view3d().mesh_ids().contains(&id));
+    }
+}
+
+#[test]
+fn moving_the_curve_slider_changes_the_number_of_arcs_drawn() {
+    let (mut h, _) = explorer();
+    let before = h.state().tree_panel().drawn.arcs.len();
+    assert_eq!(before, h.state().level().expect("level").num_arcs());
+    let rect = h.state().curve_panel().plot_rect.expect("curve drawn");
+    let y = rect.center().y;
+    // To the right: larger feature size, fewer arcs.
+    drag(
+        &mut h,
+        pos2(rect.left() + 0.2 * rect.width(), y),
+        pos2(rect.left() + 0.8 * rect.width(), y),
+    );
+    let after = h.state().tree_panel().drawn.arcs.len();
+    assert!(
+        after < before,
+        "dragging the level to larger features drew fewer arcs: {before} -> {after}"
+    );
+    assert_eq!(after, h.state().level().expect("level").num_arcs());
+}
+
+#[test]
+fn opening_a_bad_file_shows_an_error_and_keeps_the_old_dataset() {
+    let (mut h, _) = explorer();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bad = dir.path().join("broken.nrrd");
+    std::fs::write(
+        &bad,
+        b"NRRD0004\ntype: float\ndimension: 3\nsizes: 10 10\n\n",
+    )
+    .expect("write");
+    let arcs = h.state().level().expect("level").num_arcs();
+    h.state_mut().open(&bad.to_string_lossy());
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let app = h.state();
+    let err = app.error().expect("an error is shown").to_string();
+    assert!(
+        err.contains("broken.nrrd"),
+        "the message names the file: {err}"
+    );
+    assert_eq!(app.dataset().expect("dataset kept").name, "test");
+    assert_eq!(app.level().expect("level kept").num_arcs(), arcs);
+    assert!(
+        h.query_by_label_contains("broken.nrrd").is_some(),
+        "the message is on screen"
+    );
+}
