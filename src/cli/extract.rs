@@ -1,10 +1,265 @@
-//! `flexiso extract` (in progress).
+//! `flexiso extract INPUT --iso H [--arc UPPER:LOWER] [--simplify N
+//! --measure M] [--out FILE]`: contours of a volume as triangle meshes.
+//!
+//! With `--arc` the single contour of that arc at `H` (found from its path
+//! seed, single-threaded: the timing is the follower's speed); otherwise
+//! every contour at `H`, one object per contour. With `--simplify` the arcs
+//! are those of the simplified tree (each a chain of superarcs, searched
+//! for the one spanning `H`), so pruned features are left out. The file's
+//! extension picks the format (`.ply` binary, `.obj`, `.stl`).
+//!
+//! The printout lists every contour, largest first (the file's order):
+//! arc, triangles, vertices, area, enclosed volume when closed, Euler
+//! characteristic, genus, and the Euler characteristic the tree predicts
+//! (Pascucci & Cole-McLaughlin §4, [`ContourTopology`]).
+
+use super::input::InputArgs;
+use crate::contour::export::{MeshFormat, write_contours};
+use crate::contour::{self, ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed};
+use crate::field::ScalarField;
+use crate::measure::betti::ContourTopology;
+use crate::progress::Progress;
+use crate::simplify::{Measure, Simplification, SimplifiedTree};
+use crate::tree::{ArcId, ContourTree};
+use anyhow::{Context, bail};
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::time::Instant;
 
 /// Arguments of `flexiso extract`.
 #[derive(clap::Args, Debug, Default)]
-pub struct Args {}
+pub struct Args {
+    /// The volume.
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Isovalue, in the volume's units.
+    #[arg(long, value_name = "H", allow_negative_numbers = true)]
+    pub iso: f64,
+    /// Extract only the contour of the arc between these two critical
+    /// vertices (mesh vertex ids, the higher first, as `flexiso tree
+    /// --json` lists them; with --simplify, an arc of the simplified tree).
+    #[arg(long, value_name = "UPPER:LOWER", value_parser = parse_arc)]
+    pub arc: Option<(u32, u32)>,
+    /// Simplify the tree to at most N arcs first (pruned features are not
+    /// extracted).
+    #[arg(long, value_name = "N")]
+    pub simplify: Option<usize>,
+    /// Local geometric measure that ranks leaves for --simplify.
+    #[arg(long, value_enum, default_value_t = Measure::Hypervolume)]
+    pub measure: Measure,
+    /// Mesh file to write: .ply (binary), .obj or .stl. Without it, only
+    /// the printout.
+    #[arg(long, short, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
+
+fn parse_arc(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("'{s}' is not UPPER:LOWER (two vertex ids)"))?;
+    let id = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{t}' is not a vertex id"))
+    };
+    Ok((id(a)?, id(b)?))
+}
+
+/// An arc whose contour may be extracted: its ends (mesh vertices) and the
+/// superarcs it stands for, ascending.
+struct Target {
+    upper: u32,
+    lower: u32,
+    chain: Vec<ArcId>,
+}
 
 /// Runs `flexiso extract`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("flexiso extract is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    // Check what is cheap to check before the expensive work.
+    if let Some(out) = &args.out
+        && MeshFormat::from_path(out).is_none()
+    {
+        bail!(
+            "{}: unknown mesh format; use a .ply, .obj or .stl file name",
+            out.display()
+        );
+    }
+    if !args.iso.is_finite() {
+        bail!("--iso must be a finite number");
+    }
+    let t = Instant::now();
+    let volume = args.input.load()?;
+    let load = t.elapsed().as_secs_f64();
+    let field = &volume.field;
+    for w in &volume.warnings {
+        eprintln!("warning: {w}");
+    }
+    let (lo, hi) = field.range();
+    let h = args.iso;
+    if !(lo..=hi).contains(&h) {
+        bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
+    }
+    let [x, y, z] = field.dims();
+    println!(
+        "input:    {} ({}), {x} x {y} x {z}, values {lo} .. {hi} (load {load:.3} s)",
+        volume.path.display(),
+        volume.format
+    );
+
+    let t = Instant::now();
+    let (tree, _) = ContourTree::from_field(field, &Progress::new())
+        .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
+    let targets = targets(&tree, field, &args)?;
+    println!(
+        "tree:     {} superarcs{} ({:.3} s)",
+        tree.arcs().len(),
+        match args.simplify {
+            Some(_) => format!(", simplified to {} arcs by {}", targets.len(), args.measure),
+            None => String::new(),
+        },
+        t.elapsed().as_secs_f64()
+    );
+
+    let iso = Isovalue::new(h);
+    let t = Instant::now();
+    let (found, seeds): (Vec<&Target>, Vec<PathSeed>) = match args.arc {
+        Some((upper, lower)) => {
+            let target = targets
+                .iter()
+                .find(|t| t.upper == upper && t.lower == lower)
+                .with_context(|| {
+                    format!(
+                        "no arc runs from vertex {upper} down to vertex {lower} (ends are \
+                         critical vertices, the higher first; see flexiso tree --json{})",
+                        if args.simplify.is_some() {
+                            ", \"simplified\""
+                        } else {
+                            ""
+                        }
+                    )
+                })?;
+            let (top, bottom) = (field.value(upper), field.value(lower));
+            let seed = contour::path_seed_in_chain(&tree, field, &target.chain, iso).with_context(
+                || {
+                    format!(
+                        "arc {upper}:{lower} has no contour at h = {h}: its contours span \
+                         [{bottom}, {top}) (h = {top} is the next arc's)"
+                    )
+                },
+            )?;
+            (vec![target], vec![seed])
+        }
+        None => targets
+            .iter()
+            .filter_map(|t| {
+                let seed = contour::path_seed_in_chain(&tree, field, &t.chain, iso)?;
+                Some((t, seed))
+            })
+            .unzip(),
+    };
+    let seeding = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let meshes = match seeds.as_slice() {
+        [seed] => vec![ContourFollower::new(field).follow(seed, iso)],
+        _ => contour::follow_all(field, &seeds, iso),
+    };
+    let extract = t.elapsed().as_secs_f64();
+    let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();
+    println!(
+        "seeds:    {} in {seeding:.4} s ({:.2} us each, {} arcs tested)",
+        seeds.len(),
+        seeding * 1e6 / seeds.len().max(1) as f64,
+        targets.len()
+    );
+    contours.retain(|(_, m)| m.num_triangles() > 0);
+    contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
+    let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();
+    println!(
+        "extract:  h = {h}: {} contour(s), {triangles} triangles in {extract:.4} s ({:.2} M triangles/s{})",
+        contours.len(),
+        triangles as f64 / extract.max(1e-9) / 1e6,
+        if seeds.len() == 1 { ", one thread" } else { "" }
+    );
+
+    let t = Instant::now();
+    let betti = ContourTopology::new(&tree, field);
+    let topo: Vec<MeshTopology> = contours
+        .par_iter()
+        .map(|(_, m)| MeshTopology::of(&m.positions, &m.indices))
+        .collect();
+    println!(
+        "measure:  {:.3} s (Betti numbers of every superarc, topology of every contour)",
+        t.elapsed().as_secs_f64()
+    );
+    println!(
+        "{:>23} {:>10} {:>10} {:>14} {:>14} {:>6} {:>6} {:>12}",
+        "arc", "triangles", "vertices", "area", "volume", "euler", "genus", "euler (tree)"
+    );
+    for ((target, mesh), t) in contours.iter().zip(&topo) {
+        let predicted = betti.at(mesh.arc, field, iso);
+        let volume = if t.is_closed() {
+            format!("{:.6}", t.volume)
+        } else {
+            "open".to_string()
+        };
+        println!(
+            "{:>23} {:>10} {:>10} {:>14.6} {:>14} {:>6} {:>6} {:>12}",
+            format!("{}:{}", target.upper, target.lower),
+            t.triangles,
+            t.vertices,
+            t.area,
+            volume,
+            t.euler,
+            t.genus(),
+            predicted.euler
+        );
+    }
+
+    if let Some(out) = &args.out {
+        let t = Instant::now();
+        let names: Vec<String> = contours
+            .iter()
+            .map(|(t, _)| format!("arc_{}_{}", t.upper, t.lower))
+            .collect();
+        let meshes: Vec<ContourMesh> = contours.into_iter().map(|(_, m)| m).collect();
+        write_contours(out, &meshes, &names)?;
+        println!(
+            "wrote:    {} ({} object(s), {:.3} s)",
+            out.display(),
+            meshes.len(),
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// The arcs to extract from: every superarc, or every arc of the
+/// simplified tree.
+fn targets(tree: &ContourTree, field: &ScalarField, args: &Args) -> anyhow::Result<Vec<Target>> {
+    let Some(n) = args.simplify else {
+        return Ok(tree
+            .arcs()
+            .iter()
+            .enumerate()
+            .map(|(a, arc)| Target {
+                upper: tree.node(arc.upper).vertex,
+                lower: tree.node(arc.lower).vertex,
+                chain: vec![ArcId(a as u32)],
+            })
+            .collect());
+    };
+    if n == 0 {
+        bail!("--simplify needs at least 1 arc");
+    }
+    let sim = Simplification::new(tree, field, args.measure);
+    let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
+    level.set_level(n);
+    Ok(level
+        .arcs()
+        .map(|a| Target {
+            upper: a.upper_vertex,
+            lower: a.lower_vertex,
+            chain: a.chain.to_vec(),
+        })
+        .collect())
 }

@@ -14,23 +14,21 @@
 //! flood needs no stored adjacency.
 //!
 //! **Costs.** Everything the flood touches is sized to the contour: a
-//! hash set of visited tetrahedra and a hash map from crossed mesh edge
-//! (lower id, upper id) to contour vertex, both kept by the
-//! [`ContourFollower`] and cleared (not freed) between extractions; nothing
-//! per vertex of the volume. The hasher is a multiply-xorshift on the
-//! 64-bit key, several times faster than SipHash here.
+//! record per mesh vertex it touches (visited tetrahedra of that vertex's
+//! cube, contour vertices on that vertex's 7 edges), found through a slot
+//! array over the volume that is allocated once per follower and never
+//! cleared (see [`ContourFollower`]). Dense slots instead of hash tables
+//! keep the flood's spatial locality: neighbouring tetrahedra hit
+//! neighbouring memory, where a hash scatters them.
 //!
-//! **Normals** are area-weighted sums of the triangle normals rather than
-//! the field's gradient: they agree with the triangles' winding by
-//! construction (a central-difference gradient can disagree with the
-//! piecewise-linear interpolant, and vanishes on plateaus of quantised
-//! scans, exactly where `h = f(v)` extraction lands), and they cost one
-//! pass over the triangles instead of six extra field reads per vertex.
+//! **Normals** come from the field's gradient (central differences,
+//! interpolated along the crossed edge), falling back to the area-weighted
+//! triangle normal where the gradient vanishes or disagrees with the
+//! triangles' winding (see [`gradient_normals`]).
 
 use super::{ContourMesh, Isovalue, PathSeed};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
-use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::OnceLock;
 
@@ -177,17 +175,62 @@ struct TetRef {
     perm: u8,
 }
 
+/// Marks an edge without a contour vertex yet.
+const NO_VERTEX: u32 = u32::MAX;
+
+/// What the flood knows about one mesh vertex `v` it has touched: which
+/// tetrahedra of the cube whose lowest corner is `v` it has visited, and
+/// the contour vertex on each of the 7 mesh edges `(v, v + d)`, `d` a
+/// non-zero 0/1 offset (every edge of the Freudenthal mesh is one of these
+/// for exactly one `v`, its lower-coordinate end).
+#[derive(Clone, Copy, Debug)]
+struct VertexRecord {
+    vertex: u32,
+    /// Bit `p`: tetrahedron of permutation `p` visited.
+    tets: u8,
+    /// Contour vertex on the edge of offset (bit mask) `d`, at `edge[d - 1]`.
+    edge: [u32; 7],
+}
+
 /// Extracts single contours from path seeds. Keep one per thread and reuse
-/// it: its hash tables keep their capacity between extractions.
+/// it: its tables keep their memory between extractions.
+///
+/// **Memory:** 4 bytes per volume vertex (the record slots, allocated on
+/// the first extraction, zero pages the system commits only where
+/// contours pass) plus 36 bytes per mesh vertex the contour touches.
+/// **Never cleared:** a slot is valid only when the record it points to
+/// names its vertex back (the sparse-set trick of Briggs & Torczon), so
+/// forgetting the last contour is truncating the record list, O(1).
 pub struct ContourFollower<'f> {
     field: &'f ScalarField,
     dims: [usize; 3],
     /// Id offset of each cube corner (bit mask).
     corner_offset: [u32; 8],
     spacing: [f64; 3],
-    edge_vertex: HashMap<u64, u32, IdBuildHasher>,
-    visited: HashSet<u64, IdBuildHasher>,
+    /// Per volume vertex: index of its record in `records`, if valid.
+    slot: Vec<u32>,
+    records: Vec<VertexRecord>,
     stack: Vec<TetRef>,
+    /// Per contour vertex of the last contour: its mesh edge (below,
+    /// above) and where on it, for the gradient normals.
+    vertex_edges: Vec<(u32, u32, f32)>,
+}
+
+/// The record of vertex `v`, created if the flood has not touched `v` yet.
+#[inline(always)]
+fn record(slot: &mut [u32], records: &mut Vec<VertexRecord>, v: u32) -> usize {
+    let s = slot[v as usize] as usize;
+    if s < records.len() && records[s].vertex == v {
+        return s;
+    }
+    let s = records.len();
+    records.push(VertexRecord {
+        vertex: v,
+        tets: 0,
+        edge: [NO_VERTEX; 7],
+    });
+    slot[v as usize] = s as u32;
+    s
 }
 
 impl<'f> ContourFollower<'f> {
@@ -203,9 +246,10 @@ impl<'f> ContourFollower<'f> {
             dims,
             corner_offset,
             spacing: field.spacing(),
-            edge_vertex: HashMap::default(),
-            visited: HashSet::default(),
+            slot: Vec::new(),
+            records: Vec::new(),
             stack: Vec::new(),
+            vertex_edges: Vec::new(),
         }
     }
 
@@ -216,26 +260,36 @@ impl<'f> ContourFollower<'f> {
         if self.dims.iter().any(|&d| d < 2) {
             return out;
         }
+        if self.slot.len() != self.field.len() {
+            // Zeroed memory: the system hands out pages lazily.
+            self.slot = vec![0; self.field.len()];
+        }
         let field = self.field;
-        crate::with_values!(field.values(), v => self.flood(v.as_slice(), seed, iso, &mut out));
-        self.finish(&mut out);
+        crate::with_values!(field.values(), v => {
+            self.flood(v.as_slice(), seed, iso, &mut out);
+            out.normals = gradient_normals(
+                v.as_slice(),
+                self.dims,
+                self.spacing,
+                &self.vertex_edges,
+                &out.positions,
+                &out.indices,
+            );
+        });
         out
     }
 
-    /// Clears the tables, keeping their capacity unless it far exceeds what
-    /// the last contour needed (so one huge contour does not make every
-    /// later small one pay for clearing a huge table).
+    /// Forgets the last contour: O(1), but gives back memory when the last
+    /// contour was far larger than the one before (so one huge contour
+    /// does not keep its tables alive for every later small one).
     fn reset(&mut self) {
-        let (e, t) = (self.edge_vertex.len(), self.visited.len());
-        self.edge_vertex.clear();
-        self.visited.clear();
-        if self.edge_vertex.capacity() > 1 << 16 && self.edge_vertex.capacity() > 8 * e {
-            self.edge_vertex.shrink_to(2 * e);
+        let r = self.records.len();
+        if self.records.capacity() > 1 << 16 && self.records.capacity() > 8 * r {
+            self.records.shrink_to(2 * r);
         }
-        if self.visited.capacity() > 1 << 16 && self.visited.capacity() > 8 * t {
-            self.visited.shrink_to(2 * t);
-        }
+        self.records.clear();
         self.stack.clear();
+        self.vertex_edges.clear();
     }
 
     /// The tetrahedron holding edge `(a, b)`, if any.
@@ -245,12 +299,12 @@ impl<'f> ContourFollower<'f> {
         for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
             for &ma in t {
                 // Cube origin if `a` is corner `ma`.
-                let o: Vec<i64> = (0..3).map(|k| ca[k] as i64 - corner(ma)[k]).collect();
+                let o: [i64; 3] = std::array::from_fn(|k| ca[k] as i64 - corner(ma)[k]);
                 let inside = (0..3).all(|k| o[k] >= 0 && o[k] + 1 < self.dims[k] as i64);
                 if !inside {
                     continue;
                 }
-                let rel: Vec<i64> = (0..3).map(|k| cb[k] as i64 - o[k]).collect();
+                let rel: [i64; 3] = std::array::from_fn(|k| cb[k] as i64 - o[k]);
                 if rel.iter().any(|&r| !(0..=1).contains(&r)) {
                     continue;
                 }
@@ -281,16 +335,24 @@ impl<'f> ContourFollower<'f> {
             return;
         };
         let tables = TetTables::get();
-        let key = |t: &TetRef| (t.origin as u64) << 3 | t.perm as u64;
-        self.visited.insert(key(&start));
-        self.stack.push(start);
+        let Self {
+            slot,
+            records,
+            stack,
+            corner_offset,
+            vertex_edges,
+            ..
+        } = self;
+        let r = record(slot, records, start.origin);
+        records[r].tets |= 1 << start.perm;
+        stack.push(start);
         let [nx, ny, nz] = self.dims.map(|d| d as i64 - 1);
         let spacing = self.spacing;
         let sy = self.dims[0] as u32;
         let sz = sy * self.dims[1] as u32;
-        while let Some(t) = self.stack.pop() {
+        while let Some(t) = stack.pop() {
             let corners = CUBE_TETRAHEDRA[t.perm as usize];
-            let ids = corners.map(|c| t.origin + self.corner_offset[c as usize]);
+            let ids = corners.map(|c| t.origin + corner_offset[c as usize]);
             let vals = ids.map(|v| values[v as usize].to_f64());
             let mut mask = 0u8;
             for l in 0..4 {
@@ -299,32 +361,37 @@ impl<'f> ContourFollower<'f> {
             let (tris, count) = &tables.cases[t.perm as usize][mask as usize];
             for tri in &tris[..*count as usize] {
                 for &(b, a) in tri {
-                    let (vb, va) = (ids[b as usize], ids[a as usize]);
-                    let k = if vb < va {
-                        (vb as u64) << 32 | va as u64
-                    } else {
-                        (va as u64) << 32 | vb as u64
-                    };
-                    let next = out.positions.len() as u32;
-                    let idx = *self.edge_vertex.entry(k).or_insert_with(|| {
+                    // The tetrahedron is a monotone lattice path, so of two
+                    // of its corners the earlier is a subset (bit mask) of
+                    // the later: the edge's lower-coordinate end.
+                    let (lo, hi) = if b < a { (b, a) } else { (a, b) };
+                    let (clo, chi) = (corners[lo as usize], corners[hi as usize]);
+                    let owner = record(slot, records, ids[lo as usize]);
+                    let d = (chi ^ clo) as usize - 1;
+                    let mut idx = records[owner].edge[d];
+                    if idx == NO_VERTEX {
+                        idx = out.positions.len() as u32;
+                        records[owner].edge[d] = idx;
                         let (fb, fa) = (vals[b as usize], vals[a as usize]);
+                        // fa > fb or (equal values, ids ordered): s = 1/2
+                        // then, the vertex order's perturbation.
                         let s = if fa != fb {
                             ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
                         } else {
                             0.5
                         };
                         let (cb, ca) = (corner(corners[b as usize]), corner(corners[a as usize]));
-                        let p: [f32; 3] = std::array::from_fn(|k| {
+                        out.positions.push(std::array::from_fn(|k| {
                             let base = t.xyz[k] as f64 + cb[k] as f64;
                             ((base + s * (ca[k] - cb[k]) as f64) * spacing[k]) as f32
-                        });
-                        out.positions.push(p);
-                        next
-                    });
+                        }));
+                        vertex_edges.push((ids[b as usize], ids[a as usize], s as f32));
+                    }
                     out.indices.push(idx);
                 }
             }
-            // Flood across the crossed faces.
+            // Flood across the crossed faces: those whose three corners
+            // are not all on one side.
             for k in 0..4 {
                 let others = mask & !(1 << k) & 0xf;
                 if others == 0 || others == 0xf & !(1 << k) {
@@ -341,22 +408,65 @@ impl<'f> ContourFollower<'f> {
                     continue;
                 }
                 let origin = x[0] as u32 + sy * x[1] as u32 + sz * x[2] as u32;
-                let n = TetRef {
-                    origin,
-                    xyz: [x[0] as u32, x[1] as u32, x[2] as u32],
-                    perm: p,
-                };
-                if self.visited.insert(key(&n)) {
-                    self.stack.push(n);
+                let r = record(slot, records, origin);
+                if records[r].tets & (1 << p) == 0 {
+                    records[r].tets |= 1 << p;
+                    stack.push(TetRef {
+                        origin,
+                        xyz: [x[0] as u32, x[1] as u32, x[2] as u32],
+                        perm: p,
+                    });
                 }
             }
         }
     }
+}
 
-    /// Vertex normals: area-weighted triangle normals, unit length.
-    fn finish(&mut self, out: &mut ContourMesh) {
-        out.normals = vertex_normals(&out.positions, &out.indices);
+/// Unit vertex normals from the field's gradient (central differences,
+/// one-sided on the box's faces), interpolated along each vertex's mesh
+/// edge `(below, above, s)` and pointing downhill. Where the gradient
+/// vanishes (plateaus of quantised scans, exactly where `h = f(v)`
+/// extraction lands) or disagrees with the triangles' winding (the
+/// central-difference gradient is not the gradient of the piecewise-linear
+/// interpolant the triangles come from), the area-weighted triangle normal
+/// stands in, so shading never flips a vertex inside out.
+pub fn gradient_normals<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    vertex_edges: &[(u32, u32, f32)],
+    positions: &[[f32; 3]],
+    indices: &[u32],
+) -> Vec<[f32; 3]> {
+    let mut normals = vertex_normals(positions, indices);
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let gradient = |v: u32| -> [f64; 3] {
+        let v = v as usize;
+        let c = [v % dims[0], v / dims[0] % dims[1], v / stride[2]];
+        std::array::from_fn(|k| {
+            let lo = if c[k] > 0 { v - stride[k] } else { v };
+            let hi = if c[k] + 1 < dims[k] { v + stride[k] } else { v };
+            let steps = (hi - lo) / stride[k];
+            if steps == 0 {
+                0.0
+            } else {
+                (values[hi].to_f64() - values[lo].to_f64()) / (steps as f64 * spacing[k])
+            }
+        })
+    };
+    for (n, &(b, a, s)) in normals.iter_mut().zip(vertex_edges) {
+        let (gb, ga) = (gradient(b), gradient(a));
+        let s = s as f64;
+        let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])));
+        let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        if l > 0.0 && l.is_finite() {
+            let g = g.map(|x| (x / l) as f32);
+            if g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0.0 {
+                *n = g;
+            }
+        }
     }
+    normals
 }
 
 /// Unit vertex normals as area-weighted sums of the triangle normals (a

@@ -4,13 +4,14 @@
 //! whole volume, kept as the independent oracle of the tests.
 
 use super::follow::{ContourFollower, IdBuildHasher, TetTables};
-use super::seed::{arc_spans, path_seed};
+use super::seed::{PathSeed, arc_spans, path_seed};
 use super::{ContourMesh, Isovalue};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
 use crate::tree::{ArcId, ContourTree};
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::Mutex;
 
 /// The superarcs spanning `iso`, ascending by id: one per component of
 /// the level set.
@@ -22,17 +23,31 @@ pub fn spanning_arcs(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> 
 }
 
 /// Every contour at `iso`, one mesh per spanning superarc, sorted by arc
-/// id. Contours are followed in parallel (rayon), one follower per worker.
+/// id. Contours are followed in parallel (see [`follow_all`]).
 pub fn all_contours(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ContourMesh> {
-    let arcs = spanning_arcs(tree, field, iso);
-    arcs.par_iter()
-        .map_init(
-            || ContourFollower::new(field),
-            |follower, &arc| match path_seed(tree, field, arc, iso) {
-                Some(seed) => follower.follow(&seed, iso),
-                None => ContourMesh::empty(arc),
-            },
-        )
+    let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
+        .into_iter()
+        .filter_map(|arc| path_seed(tree, field, arc, iso))
+        .collect();
+    follow_all(field, &seeds, iso)
+}
+
+/// The contours through `seeds` at `iso`, in the seeds' order, followed in
+/// parallel (rayon) with one [`ContourFollower`] per worker thread, so
+/// every follower's slot array is allocated once, not once per task.
+pub fn follow_all(field: &ScalarField, seeds: &[PathSeed], iso: Isovalue) -> Vec<ContourMesh> {
+    let pool: Vec<Mutex<ContourFollower>> = (0..rayon::current_num_threads())
+        .map(|_| Mutex::new(ContourFollower::new(field)))
+        .collect();
+    seeds
+        .par_iter()
+        .map(|seed| {
+            let i = rayon::current_thread_index().unwrap_or(0) % pool.len();
+            // Uncontended: only this worker thread takes this follower. A
+            // poisoned lock (a panic elsewhere) still holds a usable one.
+            let mut follower = pool[i].lock().unwrap_or_else(|p| p.into_inner());
+            follower.follow(seed, iso)
+        })
         .collect()
 }
 
