@@ -90,19 +90,19 @@ drag() {
   sleep 2
 }
 rect() { awk -v k="$1" '$1 == k { print $2, $3, $4, $5; exit }' "$DUMP"; }
-# The arc whose midpoint is nearest to (FX, FY) as fractions of the tree rect.
-arc_near() {
-  read -r tx0 ty0 tx1 ty1 <<<"$(rect tree)"
-  awk -v px="$(( tx0 + (tx1 - tx0) * $1 / 100 ))" -v py="$(( ty0 + (ty1 - ty0) * $2 / 100 ))" \
-    '$1 == "arc" { d = ($3 - px)^2 + ($4 - py)^2; if (best == "" || d < best) { best = d; x = $3; y = $4 } }
-     END { print x, y }' "$DUMP"
+# The midpoint and height of the tallest arc on screen whose midpoint is
+# more than 60 points from (X, Y) (default: anywhere).
+tallest_arc() {
+  awk -v fx="${1:--1000}" -v fy="${2:--1000}" \
+    '$1 == "arc" && ($3 - fx)^2 + ($4 - fy)^2 > 3600 { print $5, $3, $4 }' "$DUMP" |
+    sort -rn | head -1 | awk '{ print $2, $3, $1 }'
 }
 
 shot 01_opened.png
 
-read -r ax ay <<<"$(arc_near 50 50)"
+read -r ax ay ah <<<"$(tallest_arc)"
 click "$ax" "$ay"
-read -r bx by <<<"$(arc_near 30 30)"
+read -r bx by bh <<<"$(tallest_arc "$ax" "$ay")"
 xdotool mousemove --window "$WID" "$bx" "$by" sleep 0.2 keydown shift click 1 keyup shift
 sleep 2
 grep -q '^contours [1-9]' "$DUMP" || fail "clicking arcs selected nothing"
@@ -110,7 +110,7 @@ shot 02_selected.png
 
 read -r mx my <<<"$(awk '$1 == "marker" { print $3, $4; exit }' "$DUMP")"
 if [ -n "${mx:-}" ]; then
-  drag "$mx" "$my" "$mx" $((my - 60))
+  drag "$mx" "$my" "$mx" $((my - ah / 4))
   shot 03_dragged.png
 fi
 

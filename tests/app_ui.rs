@@ -255,3 +255,99 @@ fn opening_a_bad_file_shows_an_error_and_keeps_the_old_dataset() {
         "the message is on screen"
     );
 }
+
+#[test]
+fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() {
+    let (mut h, _) = explorer();
+    // An arc whose upper node is a join at this level, and the arcs above.
+    let (arc, ups) = {
+        let app = h.state();
+        let level = app.level().expect("level");
+        let sim = level.simplification();
+        let mut found = None;
+        for a in level.arcs() {
+            let ups: Vec<SimpArcId> = level
+                .arcs()
+                .filter(|b| b.lower == a.upper)
+                .map(|b| b.id)
+                .collect();
+            if ups.len() >= 2 && sim.node_value(a.upper) > sim.node_value(a.lower) {
+                found = Some((a.id, ups));
+                break;
+            }
+        }
+        found.expect("the test volume has a join")
+    };
+    h.state_mut().select_arc(arc, true);
+    h.run_steps(2);
+    let marker = h.state().tree_panel().drawn.markers[0].1;
+    // Just above the join: below the middle of every arc above it.
+    let target_y = {
+        let d = &h.state().tree_panel().drawn;
+        ups.iter()
+            .map(|u| {
+                let i = d.arcs.iter().position(|x| x.0 == *u).expect("drawn");
+                d.arcs[i].1.y
+            })
+            .fold(f32::MIN, f32::max)
+    };
+    assert!(target_y < marker.y, "the join is above the marker");
+    drag(&mut h, marker, pos2(marker.x, target_y));
+    let app = h.state();
+    let sel = &app.selection().contours;
+    assert_eq!(
+        sel.len(),
+        ups.len(),
+        "one contour per arc above the join: {:?}",
+        sel.iter().map(|c| (c.superarc, c.h)).collect::<Vec<_>>()
+    );
+    let mut on: Vec<SimpArcId> = sel
+        .iter()
+        .map(|c| app.tree_panel().live_arc_of(c.superarc).expect("live"))
+        .collect();
+    on.sort();
+    let mut want = ups.clone();
+    want.sort();
+    assert_eq!(on, want, "the contours sit on the arcs above the join");
+    let group = sel[0].group;
+    assert!(sel.iter().all(|c| c.group == group), "they move together");
+    assert!(
+        sel.iter()
+            .all(|c| c.mesh.as_ref().is_some_and(|m| m.num_triangles() > 0)),
+        "each was extracted"
+    );
+
+    // Dragging back down below the join merges them into one again.
+    let m = h.state().tree_panel().drawn.markers[0].1;
+    drag(&mut h, m, marker);
+    assert_eq!(h.state().selection().contours.len(), 1, "merged again");
+}
+
+#[test]
+fn all_contours_at_h_extracts_every_component_in_the_background() {
+    let (mut h, gpu) = explorer();
+    h.state_mut().set_show_all(true);
+    h.run_steps(2);
+    let ctx = h.ctx.clone();
+    h.state_mut().wait_for_all_contours(&ctx);
+    h.run_steps(2);
+    let app = h.state();
+    let n = app.all_contours_shown();
+    let (tree, field) = {
+        let ds = app.dataset().expect("dataset");
+        (ds.tree.clone(), ds.field.clone())
+    };
+    let expected = flexiso::contour::all_contours(
+        &tree,
+        &field,
+        flexiso::contour::Isovalue::new(app.global_h()),
+    )
+    .iter()
+    .filter(|m| !m.indices.is_empty())
+    .count();
+    assert!(n > 0, "some contours at the middle value");
+    assert_eq!(n, expected);
+    if gpu {
+        assert_eq!(app.view3d().mesh_ids().len(), n, "all drawn");
+    }
+}

@@ -18,17 +18,47 @@ pub struct CurvePanel {
     key: usize,
 }
 
+/// Labels the decades of a log10 axis: 0.01 0.1 1 10 100 1000, then 1e4.
 fn decade_label(mark: GridMark) -> String {
-    let v = 10f64.powf(mark.value);
-    if (mark.value - mark.value.round()).abs() < 1e-6 {
-        if (-3.0..=5.0).contains(&mark.value) {
-            super::tree_panel::fmt_value(v)
-        } else {
-            format!("1e{}", mark.value.round() as i64)
-        }
-    } else {
-        String::new()
+    let n = mark.value.round();
+    if (mark.value - n).abs() > 1e-6 {
+        return String::new();
     }
+    if (-2.0..=3.0).contains(&n) {
+        super::tree_panel::fmt_value(10f64.powf(n))
+    } else {
+        format!("1e{}", n as i64)
+    }
+}
+
+/// Grid lines of a log10 axis: every decade (every few when there are
+/// many), with 2..9 between them when few decades show.
+fn decade_grid(input: egui_plot::GridInput) -> Vec<GridMark> {
+    let (lo, hi) = input.bounds;
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
+        return Vec::new();
+    }
+    let decades = hi - lo;
+    let every = (decades / 8.0).ceil().max(1.0);
+    let mut marks = Vec::new();
+    let mut n = (lo / every).floor() * every;
+    while n <= hi {
+        marks.push(GridMark {
+            value: n,
+            step_size: every,
+        });
+        if decades <= 4.0 {
+            for k in 2..10 {
+                marks.push(GridMark {
+                    value: n + (k as f64).log10(),
+                    step_size: every / 10.0,
+                });
+            }
+        }
+        n += every;
+    }
+    marks.retain(|m| m.value >= lo && m.value <= hi);
+    marks
 }
 
 impl CurvePanel {
@@ -86,8 +116,8 @@ impl CurvePanel {
             .y_axis_label("arcs")
             .x_axis_formatter(|m, _| decade_label(m))
             .y_axis_formatter(|m, _| decade_label(m))
-            .x_grid_spacer(egui_plot::log_grid_spacer(10))
-            .y_grid_spacer(egui_plot::log_grid_spacer(10))
+            .x_grid_spacer(decade_grid)
+            .y_grid_spacer(decade_grid)
             .show(ui, |plot_ui| {
                 plot_ui.line(Line::new("curve", PlotPoints::from(points.clone())).width(1.5));
                 if let Some(x) = cur_x {

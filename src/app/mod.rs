@@ -56,13 +56,34 @@ enum Dialog {
     TreeJson(PathBuf),
 }
 
-/// Every contour at the global isovalue, one mesh per component.
-#[derive(Default)]
+/// Every contour at the global isovalue, one mesh per component,
+/// extracted on a worker thread (a whole isosurface of a big volume takes
+/// seconds on a small machine; the window keeps drawing meanwhile).
 struct AllContours {
+    /// (isovalue bits, field) of the meshes shown.
     key: Option<(u64, usize)>,
+    /// The key being computed.
+    pending: Option<(u64, usize)>,
     meshes: Vec<Arc<ContourMesh>>,
     version: u64,
     millis: f64,
+    tx: Sender<((u64, usize), Vec<Arc<ContourMesh>>, f64)>,
+    rx: Receiver<((u64, usize), Vec<Arc<ContourMesh>>, f64)>,
+}
+
+impl Default for AllContours {
+    fn default() -> Self {
+        let (tx, rx) = channel();
+        Self {
+            key: None,
+            pending: None,
+            meshes: Vec::new(),
+            version: 0,
+            millis: 0.0,
+            tx,
+            rx,
+        }
+    }
 }
 
 /// Frame times written with `flexiso open --frame-log FILE`.
@@ -96,6 +117,8 @@ pub struct FlexisoApp {
     /// Where to write the screen positions of arcs and markers (scripts).
     ui_dump: Option<(PathBuf, String)>,
     all_checkbox: Option<egui::Rect>,
+    /// Frames the tree panel has been sized for a full window.
+    sized_frames: u32,
 }
 
 impl FlexisoApp {
@@ -123,6 +146,7 @@ impl FlexisoApp {
             ui_ms: 0.0,
             ui_dump: None,
             all_checkbox: None,
+            sized_frames: 0,
         }
     }
 
@@ -167,7 +191,7 @@ impl FlexisoApp {
 
     /// Writes, whenever they change, the screen positions (points) of the
     /// tree's arcs and markers and of the panels to `path`, one per line:
-    /// `arc ID X Y`, `marker ID X Y`, `curve|tree|view X0 Y0 X1 Y1`, and
+    /// `arc ID X Y HEIGHT`, `marker ID X Y`, `curve|tree|view X0 Y0 X1 Y1`, and
     /// `contours N`. For scripts that click with xdotool.
     pub fn set_ui_dump(&mut self, path: PathBuf) {
         self.ui_dump = Some((path, String::new()));
@@ -199,8 +223,8 @@ impl FlexisoApp {
         for (id, p) in &d.markers {
             s.push_str(&format!("marker {id} {:.0} {:.0}\n", p.x, p.y));
         }
-        for (id, p) in &d.arcs {
-            s.push_str(&format!("arc {} {:.0} {:.0}\n", id.0, p.x, p.y));
+        for ((id, p), h) in d.arcs.iter().zip(&d.arc_heights) {
+            s.push_str(&format!("arc {} {:.0} {:.0} {:.0}\n", id.0, p.x, p.y, h));
         }
         if *last != s {
             let _ = std::fs::write(&*path, &s);
@@ -479,25 +503,71 @@ impl FlexisoApp {
         }
     }
 
-    fn update_all_contours(&mut self, pointer_down: bool) {
+    fn update_all_contours(&mut self, ctx: &egui::Context, pointer_down: bool) {
+        while let Ok((key, meshes, millis)) = self.all.rx.try_recv() {
+            if self.all.pending == Some(key) {
+                self.all.pending = None;
+                self.all.key = Some(key);
+                self.all.meshes = meshes;
+                self.all.millis = millis;
+                self.all.version += 1;
+            }
+        }
         let Some(ds) = &self.dataset else { return };
         if !self.show_all {
             return;
         }
         let key = (self.global_h.to_bits(), Arc::as_ptr(&ds.field) as usize);
-        // Recompute when the line is let go, not on every drag frame.
-        if self.all.key == Some(key) || pointer_down {
+        // Recompute when the line is let go, not on every drag frame, and
+        // one extraction at a time (the latest value wins).
+        if self.all.key == Some(key) || self.all.pending.is_some() || pointer_down {
             return;
         }
-        let t = Instant::now();
-        self.all.meshes = all_contours(&ds.tree, &ds.field, Isovalue::new(self.global_h))
-            .into_iter()
-            .filter(|m| !m.indices.is_empty())
-            .map(Arc::new)
-            .collect();
-        self.all.millis = t.elapsed().as_secs_f64() * 1e3;
-        self.all.key = Some(key);
-        self.all.version += 1;
+        self.all.pending = Some(key);
+        let (tree, field, h) = (Arc::clone(&ds.tree), Arc::clone(&ds.field), self.global_h);
+        let tx = self.all.tx.clone();
+        let ctx = ctx.clone();
+        let _ = std::thread::Builder::new()
+            .name("flexiso-isosurface".into())
+            .spawn(move || {
+                let t = Instant::now();
+                let meshes: Vec<Arc<ContourMesh>> = all_contours(&tree, &field, Isovalue::new(h))
+                    .into_iter()
+                    .filter(|m| !m.indices.is_empty())
+                    .map(Arc::new)
+                    .collect();
+                let _ = tx.send((key, meshes, t.elapsed().as_secs_f64() * 1e3));
+                ctx.request_repaint();
+            });
+    }
+
+    /// Waits for the "all contours at h" extraction in flight (tests).
+    pub fn wait_for_all_contours(&mut self, ctx: &egui::Context) {
+        if self.all.pending.is_none() {
+            return;
+        }
+        if let Ok((key, meshes, millis)) = self.all.rx.recv() {
+            self.all.pending = None;
+            self.all.key = Some(key);
+            self.all.meshes = meshes;
+            self.all.millis = millis;
+            self.all.version += 1;
+        }
+        self.update_all_contours(ctx, false);
+    }
+
+    /// Number of contours shown by "all contours at h".
+    pub fn all_contours_shown(&self) -> usize {
+        if self.show_all {
+            self.all.meshes.len()
+        } else {
+            0
+        }
+    }
+
+    /// Switches "all contours at h" on or off.
+    pub fn set_show_all(&mut self, on: bool) {
+        self.show_all = on;
     }
 
     fn scene(&self) -> Vec<SceneMesh> {
@@ -630,7 +700,10 @@ impl FlexisoApp {
                         "ui {:.1} ms  3D {:.1} ms",
                         self.ui_ms, self.view3d.last_render_ms
                     ));
-                    if self.show_all {
+                    if self.all.pending.is_some() {
+                        ui.spinner();
+                        ui.label("extracting all contours at h…");
+                    } else if self.show_all {
                         ui.label(format!(
                             "{} contours at h ({:.0} ms)",
                             self.all.meshes.len(),
@@ -778,7 +851,7 @@ impl eframe::App for FlexisoApp {
         self.handle_input(ui);
         let rs = frame.wgpu_render_state().cloned();
         let pointer_down = ui.input(|i| i.pointer.any_down());
-        self.update_all_contours(pointer_down);
+        self.update_all_contours(&ui.ctx().clone(), pointer_down);
 
         egui::Panel::top("menu").show(ui, |ui| {
             self.menu_bar(ui);
@@ -799,25 +872,31 @@ impl eframe::App for FlexisoApp {
             }
         });
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
-        egui::Panel::left("tree")
-            .resizable(true)
-            .default_size(560.0)
-            .min_size(260.0)
-            .show(ui, |ui| {
-                let (Some(ds), Some(level)) = (&self.dataset, &mut self.level) else {
-                    ui.label("Loading…");
-                    return;
-                };
-                let curve_h = 210.0f32.min(ui.available_height() * 0.4);
-                let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
-                let w = ui.available_width();
-                ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
-                    self.tree_panel
-                        .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
-                });
-                ui.separator();
-                self.curve_panel.ui(ui, level);
+        // The window may start small before the window manager sizes it;
+        // egui keeps the panel's first size, so size it once the window is.
+        let screen_w = ui.ctx().content_rect().width();
+        let mut tree = egui::Panel::left("tree").resizable(true).min_size(260.0);
+        if self.sized_frames < 3 {
+            tree = tree.exact_size((0.38 * screen_w).clamp(300.0, 760.0));
+            if screen_w >= 900.0 && self.dataset.is_some() {
+                self.sized_frames += 1;
+            }
+        }
+        tree.show(ui, |ui| {
+            let (Some(ds), Some(level)) = (&self.dataset, &mut self.level) else {
+                ui.label("Loading…");
+                return;
+            };
+            let curve_h = 210.0f32.min(ui.available_height() * 0.4);
+            let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
+            let w = ui.available_width();
+            ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
+                self.tree_panel
+                    .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
             });
+            ui.separator();
+            self.curve_panel.ui(ui, level);
+        });
         egui::Panel::right("selection")
             .resizable(true)
             .default_size(250.0)
@@ -844,6 +923,10 @@ impl eframe::App for FlexisoApp {
         self.save_screenshot(rs.as_ref());
         self.write_ui_dump(view_rect);
 
+        if self.show_all && self.all.key.is_none() && self.all.pending.is_none() {
+            // Just switched on: extract at the next frame.
+            ui.ctx().request_repaint();
+        }
         if self.pipeline.running().is_some() {
             // Animate the progress bar.
             ui.ctx().request_repaint_after(Duration::from_millis(50));

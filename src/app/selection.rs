@@ -39,6 +39,9 @@ pub struct Contour {
     pub superarc: ArcId,
     /// The isovalue (the level set at `h + ε`, see [`Isovalue`]).
     pub h: f64,
+    /// Contours split from one another by dragging through a node share a
+    /// group (the first one's id) and move together.
+    pub group: u64,
     /// Colour in the 3D view and on the tree.
     pub colour: Color32,
     /// Drawn in the 3D view.
@@ -110,6 +113,7 @@ impl Selection {
             .unwrap_or(PALETTE[id as usize % PALETTE.len()]);
         let mut c = Contour {
             id,
+            group: id,
             superarc,
             h,
             colour,
@@ -141,6 +145,52 @@ impl Selection {
             c.h = h;
             extract(field, tree, c);
         }
+    }
+
+    /// Puts the contours of `group` at `positions` (superarc, isovalue):
+    /// contour `lead` takes the first, the other members the next ones,
+    /// new members (same colour) any extra, and members left over are
+    /// removed (contours that met at a node merged). Only contours that
+    /// moved are re-extracted.
+    pub fn set_group(
+        &mut self,
+        field: &ScalarField,
+        tree: &ContourTree,
+        lead: u64,
+        positions: &[(ArcId, f64)],
+    ) {
+        let Some(group) = self.get(lead).map(|c| c.group) else {
+            return;
+        };
+        if positions.is_empty() {
+            return;
+        }
+        let mut members: Vec<u64> = vec![lead];
+        members.extend(
+            self.contours
+                .iter()
+                .filter(|c| c.group == group && c.id != lead)
+                .map(|c| c.id),
+        );
+        for (i, &(superarc, h)) in positions.iter().enumerate() {
+            match members.get(i) {
+                Some(&id) => self.move_to(field, tree, id, superarc, h),
+                None => {
+                    let colour = self.get(lead).map(|c| c.colour);
+                    let id = self.add(field, tree, superarc, h, false);
+                    if let Some(c) = self.get_mut(id) {
+                        c.group = group;
+                        if let Some(col) = colour {
+                            c.colour = col;
+                        }
+                    }
+                }
+            }
+        }
+        for &id in members.iter().skip(positions.len()) {
+            self.remove(id);
+        }
+        self.active = Some(lead);
     }
 
     /// Removes contour `id`.

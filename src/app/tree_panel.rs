@@ -5,8 +5,9 @@
 //!
 //! Mouse: click an arc selects its contour (at the global isovalue when
 //! the arc spans it, else at the arc's middle); shift-click adds; drag a
-//! marker moves that contour (clamped to the arc it is on: past a node the
-//! contour does not yet follow the level set into the next arcs); drag the
+//! marker moves that contour along the level set (past a join going up it
+//! becomes the contours of the arcs above, and contours that meet at a node
+//! merge; at an extremum it stops); drag the
 //! dashed line moves the global isovalue; wheel zooms, right or middle
 //! drag pans, double-click resets the view.
 
@@ -41,6 +42,10 @@ pub struct Drawn {
     pub rect: Option<Rect>,
     /// Live arcs drawn, with the screen midpoint of each.
     pub arcs: Vec<(SimpArcId, Pos2)>,
+    /// Screen height of each drawn arc (parallel to `arcs`).
+    pub arc_heights: Vec<f32>,
+    /// Screen ends (upper, lower) of each drawn arc (parallel to `arcs`).
+    pub arc_ends: Vec<(Pos2, Pos2)>,
     /// Markers drawn: contour id and position.
     pub markers: Vec<(u64, Pos2)>,
     /// Screen y of the global isovalue line.
@@ -276,9 +281,7 @@ impl TreePanel {
         {
             match self.drag {
                 Some(Drag::Marker(id)) => {
-                    if let Some(&(_, _, _, arc)) = markers.iter().find(|m| m.0 == id) {
-                        Self::drag_marker(ds, level, sel, id, arc, tf.value_at(p.y));
-                    }
+                    self.drag_marker(ds, level, sel, id, tf.value_at(p.y));
                 }
                 Some(Drag::IsoLine) => {
                     *global_h = tf.value_at(p.y).clamp(lo, hi);
@@ -442,6 +445,8 @@ impl TreePanel {
                 .iter()
                 .map(|&(id, a, b)| (id, a + (b - a) * 0.5))
                 .collect(),
+            arc_heights: segs.iter().map(|&(_, a, b)| (b.y - a.y).abs()).collect(),
+            arc_ends: segs.iter().map(|&(_, a, b)| (a, b)).collect(),
             markers: markers.iter().map(|m| (m.0, m.1)).collect(),
             iso_y,
         };
@@ -470,24 +475,98 @@ impl TreePanel {
         }
     }
 
-    /// Moves contour `id` on live arc `arc` to value `v`, clamped to the
-    /// arc's range.
+    /// Moves contour `id` (and the contours of its group) to value `v`
+    /// along the level set: on its arc while `v` stays in the arc's range;
+    /// past the upper node into every arc above it (a join splits the
+    /// contour going up), past the lower node into every arc below (a
+    /// split); contours that meet on one arc merge. At a maximum or
+    /// minimum the contour stops at the end of its arc.
     fn drag_marker(
+        &self,
         ds: &Dataset,
         level: &SimplifiedTree,
         sel: &mut Selection,
         id: u64,
-        arc: SimpArcId,
         v: f64,
     ) {
+        let Some(group) = sel.get(id).map(|c| c.group) else {
+            return;
+        };
+        // The dragged contour first, so it keeps following the pointer.
+        let mut starts: Vec<SimpArcId> = Vec::new();
+        let lead = sel.get(id).and_then(|c| self.live_arc_of(c.superarc));
+        starts.extend(lead);
+        for c in sel
+            .contours
+            .iter()
+            .filter(|c| c.group == group && c.id != id)
+        {
+            if let Some(a) = self.live_arc_of(c.superarc) {
+                starts.push(a);
+            }
+        }
         let sim = level.simplification();
-        let la = level.arc(arc);
-        let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
-        // The contours of an arc exist at h + ε for h in [bottom, top).
-        let top = vu - (vu - vl) * 1e-4;
-        let h = v.clamp(vl, top.max(vl));
-        if let Some(seed) = path_seed_in_chain(&ds.tree, &ds.field, la.chain, Isovalue::new(h)) {
-            sel.move_to(&ds.field, &ds.tree, id, seed.arc, h);
+        let mut arcs: Vec<SimpArcId> = Vec::new();
+        for s in starts {
+            for a in level_set_arcs(level, s, v) {
+                if !arcs.contains(&a) {
+                    arcs.push(a);
+                }
+            }
+        }
+        let mut positions = Vec::new();
+        for a in arcs {
+            let la = level.arc(a);
+            let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
+            // The contours of an arc exist at h + ε for h in [bottom, top).
+            let top = vu - (vu - vl) * 1e-4;
+            let h = v.clamp(vl, top.max(vl));
+            if let Some(seed) = path_seed_in_chain(&ds.tree, &ds.field, la.chain, Isovalue::new(h))
+            {
+                positions.push((seed.arc, h));
+            }
+        }
+        sel.set_group(&ds.field, &ds.tree, id, &positions);
+    }
+}
+
+/// The live arcs holding the level set at `v` reached from arc `start` by
+/// following it monotonically through the nodes in between (all arcs
+/// above an upper node, all below a lower one); an arc ending at an
+/// extremum keeps the contour at its end.
+pub fn level_set_arcs(level: &SimplifiedTree, start: SimpArcId, v: f64) -> Vec<SimpArcId> {
+    let sim = level.simplification();
+    let mut out = Vec::new();
+    let mut stack = vec![start];
+    while let Some(a) = stack.pop() {
+        let (u, l) = (sim.upper(a), sim.lower(a));
+        let (top, bottom) = (sim.node_value(u), sim.node_value(l));
+        let next: Vec<SimpArcId> = if v >= top {
+            level
+                .arc_ids()
+                .iter()
+                .map(|&b| SimpArcId(b))
+                .filter(|&b| sim.lower(b) == u)
+                .collect()
+        } else if v < bottom {
+            level
+                .arc_ids()
+                .iter()
+                .map(|&b| SimpArcId(b))
+                .filter(|&b| sim.upper(b) == l)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if next.is_empty() {
+            if !out.contains(&a) {
+                out.push(a);
+            }
+        } else {
+            let mut next = next;
+            next.sort();
+            stack.extend(next.into_iter().rev());
         }
     }
+    out
 }

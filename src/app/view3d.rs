@@ -209,6 +209,15 @@ impl View3d {
                 Color32::WHITE,
             );
         }
+        if scene.is_empty() {
+            ui.painter().text(
+                rect.center_top() + egui::vec2(0.0, 24.0),
+                egui::Align2::CENTER_TOP,
+                "Click an arc in the contour tree to see its contour here",
+                egui::FontId::proportional(14.0),
+                Color32::from_gray(150),
+            );
+        }
         if let Some(p) = &self.problem {
             ui.painter().text(
                 rect.left_bottom() + egui::vec2(8.0, -8.0),
