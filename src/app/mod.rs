@@ -67,9 +67,12 @@ struct AllContours {
     meshes: Vec<Arc<ContourMesh>>,
     version: u64,
     millis: f64,
-    tx: Sender<((u64, usize), Vec<Arc<ContourMesh>>, f64)>,
-    rx: Receiver<((u64, usize), Vec<Arc<ContourMesh>>, f64)>,
+    tx: Sender<IsosurfaceResult>,
+    rx: Receiver<IsosurfaceResult>,
 }
+
+/// An extraction of every contour at h: its key, the meshes, milliseconds.
+type IsosurfaceResult = ((u64, usize), Vec<Arc<ContourMesh>>, f64);
 
 impl Default for AllContours {
     fn default() -> Self {
