@@ -351,3 +351,57 @@ fn all_contours_at_h_extracts_every_component_in_the_background() {
         assert_eq!(app.view3d().mesh_ids().len(), n, "all drawn");
     }
 }
+
+#[test]
+fn exports_write_meshes_the_tree_as_json_and_the_3d_view_as_png() {
+    let (mut h, gpu) = explorer();
+    let (_, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let dir = tempfile::tempdir().expect("tempdir");
+    for ext in ["ply", "obj", "stl"] {
+        let path = dir.path().join(format!("contours.{ext}"));
+        let n = h.state().export_contours(&path).expect("export");
+        assert_eq!(n, 1);
+        assert!(std::fs::metadata(&path).expect("written").len() > 100);
+    }
+    let json_path = dir.path().join("tree.json");
+    h.state().export_tree_json(&json_path).expect("json");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json_path).expect("read")).expect("parse");
+    let shown = h.state().level().expect("level").num_arcs();
+    assert_eq!(
+        json["simplified"]["arcs"].as_array().map(Vec::len),
+        Some(shown),
+        "the JSON holds the level shown"
+    );
+    assert!(json["nodes"].as_array().is_some_and(|n| !n.is_empty()));
+    if gpu {
+        let png = dir.path().join("view.png");
+        h.state_mut().request_screenshot(png.clone());
+        h.run_steps(2);
+        assert_eq!(h.state().error(), None);
+        let img = image::open(&png).expect("screenshot written").to_rgba8();
+        assert!(img.width() > 100 && img.height() > 100);
+        // The contour's colour shows somewhere in the view.
+        let colour = h.state().selection().contours[0].colour;
+        let close = img.pixels().any(|p| {
+            (i32::from(p[0]) - i32::from(colour.r())).abs() < 60
+                && (i32::from(p[1]) - i32::from(colour.g())).abs() < 60
+                && (i32::from(p[2]) - i32::from(colour.b())).abs() < 60
+                && p[0] != p[2]
+        });
+        assert!(close, "the screenshot shows the contour");
+    }
+}
+
+#[test]
+fn betti_numbers_arrive_in_the_background_for_the_tooltips() {
+    let (mut h, _) = explorer();
+    let topo = h.state_mut().wait_for_betti().expect("Betti numbers");
+    let app = h.state();
+    let ds = app.dataset().expect("dataset");
+    // Every superarc has at least one stretch.
+    for a in 0..ds.tree.arcs().len() as u32 {
+        assert!(!topo.segments(flexiso::tree::ArcId(a)).is_empty());
+    }
+}

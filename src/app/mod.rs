@@ -32,6 +32,7 @@ use egui::{Color32, Key, Modifiers, RichText};
 use crate::cli::input::InputArgs;
 use crate::contour::{ContourMesh, Isovalue, all_contours};
 use crate::field::ScalarField;
+use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
 use crate::simplify::{Measure, SimplifiedTree};
 
@@ -122,6 +123,10 @@ pub struct FlexisoApp {
     all_checkbox: Option<egui::Rect>,
     /// Frames the tree panel has been sized for a full window.
     sized_frames: u32,
+    /// Betti numbers of every superarc's contours (computed after the
+    /// dataset is shown, on a worker), for the tree's tooltips.
+    betti: Option<Arc<ContourTopology>>,
+    betti_rx: Option<Receiver<(usize, Arc<ContourTopology>)>>,
 }
 
 impl FlexisoApp {
@@ -150,6 +155,8 @@ impl FlexisoApp {
             ui_dump: None,
             all_checkbox: None,
             sized_frames: 0,
+            betti: None,
+            betti_rx: None,
         }
     }
 
@@ -348,6 +355,9 @@ impl FlexisoApp {
                     eprintln!("warning: {w}");
                 }
                 self.info = (!ds.warnings.is_empty()).then(|| ds.warnings.join("; "));
+                if !same_field {
+                    self.start_betti(&ds);
+                }
                 self.level = Some(level);
                 self.dataset = Some(ds);
                 self.error = None;
@@ -355,6 +365,48 @@ impl FlexisoApp {
             Err(e) if e == "cancelled" => {}
             Err(e) => self.error = Some(e),
         }
+    }
+
+    fn start_betti(&mut self, ds: &Dataset) {
+        self.betti = None;
+        let (tx, rx) = channel();
+        self.betti_rx = Some(rx);
+        let (tree, field) = (Arc::clone(&ds.tree), Arc::clone(&ds.field));
+        let key = Arc::as_ptr(&ds.field) as usize;
+        let notify = self.pipeline.notifier();
+        let _ = std::thread::Builder::new()
+            .name("flexiso-betti".into())
+            .spawn(move || {
+                let topo = Arc::new(ContourTopology::new(&tree, &field));
+                let _ = tx.send((key, topo));
+                if let Some(n) = notify {
+                    n();
+                }
+            });
+    }
+
+    fn poll_betti(&mut self) {
+        let Some(rx) = &self.betti_rx else { return };
+        if let Ok((key, topo)) = rx.try_recv() {
+            if self
+                .dataset
+                .as_ref()
+                .is_some_and(|d| Arc::as_ptr(&d.field) as usize == key)
+            {
+                self.betti = Some(topo);
+            }
+            self.betti_rx = None;
+        }
+    }
+
+    /// Waits for the Betti numbers of the dataset shown (tests).
+    pub fn wait_for_betti(&mut self) -> Option<Arc<ContourTopology>> {
+        if let Some(rx) = self.betti_rx.take()
+            && let Ok((_, topo)) = rx.recv()
+        {
+            self.betti = Some(topo);
+        }
+        self.betti.clone()
     }
 
     /// Selects the contour of the live arc `arc` (tests; the tree panel
@@ -851,6 +903,7 @@ impl eframe::App for FlexisoApp {
             self.accept(r);
         }
         self.handle_dialogs();
+        self.poll_betti();
         self.handle_input(ui);
         let rs = frame.wgpu_render_state().cloned();
         let pointer_down = ui.input(|i| i.pointer.any_down());
@@ -894,6 +947,7 @@ impl eframe::App for FlexisoApp {
             let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
             let w = ui.available_width();
             ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
+                self.tree_panel.betti = self.betti.clone();
                 self.tree_panel
                     .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
             });

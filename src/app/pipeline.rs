@@ -226,6 +226,11 @@ impl Pipeline {
         self.notify = Some(f);
     }
 
+    /// The function set by [`Pipeline::set_notify`], for other workers.
+    pub fn notifier(&self) -> Option<Arc<dyn Fn() + Send + Sync>> {
+        self.notify.clone()
+    }
+
     /// Starts `request` on a worker thread, cancelling the current job.
     pub fn start(&mut self, request: Request, measure: Measure, what: String) {
         self.cancel();

@@ -69,6 +69,8 @@ pub struct TreePanel {
     pub drawn: Drawn,
     /// The arc under the pointer.
     pub hovered: Option<SimpArcId>,
+    /// Betti numbers of the superarcs' contours, once computed.
+    pub betti: Option<std::sync::Arc<crate::measure::betti::ContourTopology>>,
 }
 
 /// Maps values and columns to the screen and back.
@@ -427,8 +429,31 @@ impl TreePanel {
         {
             let la = level.arc(a);
             let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
+            // Genus of the contour at the pointer's value (or the middle).
+            let hv = pointer
+                .map(|p| tf.value_at(p.y))
+                .filter(|h| *h >= vl && *h < vu)
+                .unwrap_or(0.5 * (vl + vu));
+            let genus = match &self.betti {
+                Some(b) => {
+                    let iso = Isovalue::new(hv);
+                    match path_seed_in_chain(&ds.tree, &ds.field, la.chain, iso) {
+                        Some(seed) => {
+                            let seg = b.at(seed.arc, &ds.field, iso);
+                            format!(
+                                "contour at {}: genus {}{}",
+                                fmt_value(hv),
+                                seg.genus(),
+                                if seg.closed() { ", closed" } else { ", open" }
+                            )
+                        }
+                        None => String::new(),
+                    }
+                }
+                None => "genus: computing…".into(),
+            };
             let tip = format!(
-                "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\nclick: select its contour, shift-click: add",
+                "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\n{genus}\nclick: select its contour, shift-click: add",
                 a.0,
                 fmt_value(vl),
                 fmt_value(vu),
