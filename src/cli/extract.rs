@@ -15,7 +15,9 @@
 
 use super::input::InputArgs;
 use crate::contour::export::{MeshFormat, write_contours};
-use crate::contour::{self, ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed};
+use crate::contour::{
+    self, ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed, PathSeeds,
+};
 use crate::field::ScalarField;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
@@ -121,6 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
 
     let iso = Isovalue::new(h);
+    let path_seeds = PathSeeds::new();
     let t = Instant::now();
     let (found, seeds): (Vec<&Target>, Vec<PathSeed>) = match args.arc {
         Some((upper, lower)) => {
@@ -139,20 +142,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     )
                 })?;
             let (top, bottom) = (field.value(upper), field.value(lower));
-            let seed = contour::path_seed_in_chain(&tree, field, &target.chain, iso).with_context(
-                || {
+            let seed = path_seeds
+                .seed_in_chain(&tree, field, &target.chain, iso)
+                .with_context(|| {
                     format!(
                         "arc {upper}:{lower} has no contour at h = {h}: its contours span \
                          [{bottom}, {top}) (h = {top} is the next arc's)"
                     )
-                },
-            )?;
+                })?;
             (vec![target], vec![seed])
         }
         None => targets
             .iter()
             .filter_map(|t| {
-                let seed = contour::path_seed_in_chain(&tree, field, &t.chain, iso)?;
+                let seed = path_seeds.seed_in_chain(&tree, field, &t.chain, iso)?;
                 Some((t, seed))
             })
             .unzip(),

@@ -29,6 +29,7 @@
 use super::{ContourMesh, Isovalue, PathSeed};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
+use std::collections::VecDeque;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::OnceLock;
 
@@ -173,6 +174,8 @@ struct TetRef {
     origin: u32,
     xyz: [u32; 3],
     perm: u8,
+    /// The record of `origin` (made when the tetrahedron was queued).
+    rec: u32,
 }
 
 /// Marks an edge without a contour vertex yet.
@@ -210,7 +213,7 @@ pub struct ContourFollower<'f> {
     /// Per volume vertex: index of its record in `records`, if valid.
     slot: Vec<u32>,
     records: Vec<VertexRecord>,
-    stack: Vec<TetRef>,
+    queue: VecDeque<TetRef>,
     /// Per contour vertex of the last contour: its mesh edge (below,
     /// above) and where on it, for the gradient normals.
     vertex_edges: Vec<(u32, u32, f32)>,
@@ -248,7 +251,7 @@ impl<'f> ContourFollower<'f> {
             spacing: field.spacing(),
             slot: Vec::new(),
             records: Vec::new(),
-            stack: Vec::new(),
+            queue: VecDeque::new(),
             vertex_edges: Vec::new(),
         }
     }
@@ -288,14 +291,13 @@ impl<'f> ContourFollower<'f> {
             self.records.shrink_to(2 * r);
         }
         self.records.clear();
-        self.stack.clear();
+        self.queue.clear();
         self.vertex_edges.clear();
     }
 
     /// The tetrahedron holding edge `(a, b)`, if any.
     fn tet_of_edge(&self, a: u32, b: u32) -> Option<TetRef> {
-        let g = self.field.mesh();
-        let (ca, cb) = (g.coords(a), g.coords(b));
+        let (ca, cb) = (self.field.coords(a), self.field.coords(b));
         for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
             for &ma in t {
                 // Cube origin if `a` is corner `ma`.
@@ -311,11 +313,13 @@ impl<'f> ContourFollower<'f> {
                 let mb = (rel[0] | rel[1] << 1 | rel[2] << 2) as u8;
                 if mb != ma && t.contains(&mb) {
                     let xyz = [o[0] as u32, o[1] as u32, o[2] as u32];
-                    let origin = g.vertex(o[0] as usize, o[1] as usize, o[2] as usize);
+                    let origin =
+                        (o[0] + self.dims[0] as i64 * (o[1] + self.dims[1] as i64 * o[2])) as u32;
                     return Some(TetRef {
                         origin,
                         xyz,
                         perm: p as u8,
+                        rec: 0,
                     });
                 }
             }
@@ -331,26 +335,27 @@ impl<'f> ContourFollower<'f> {
         out: &mut ContourMesh,
     ) {
         self.reset();
-        let Some(start) = self.tet_of_edge(seed.below, seed.above) else {
+        let Some(mut start) = self.tet_of_edge(seed.below, seed.above) else {
             return;
         };
         let tables = TetTables::get();
         let Self {
             slot,
             records,
-            stack,
+            queue,
             corner_offset,
             vertex_edges,
             ..
         } = self;
         let r = record(slot, records, start.origin);
         records[r].tets |= 1 << start.perm;
-        stack.push(start);
+        start.rec = r as u32;
+        queue.push_back(start);
         let [nx, ny, nz] = self.dims.map(|d| d as i64 - 1);
         let spacing = self.spacing;
         let sy = self.dims[0] as u32;
         let sz = sy * self.dims[1] as u32;
-        while let Some(t) = stack.pop() {
+        while let Some(t) = queue.pop_front() {
             let corners = CUBE_TETRAHEDRA[t.perm as usize];
             let ids = corners.map(|c| t.origin + corner_offset[c as usize]);
             let vals = ids.map(|v| values[v as usize].to_f64());
@@ -359,6 +364,16 @@ impl<'f> ContourFollower<'f> {
                 mask |= (iso.above_value(vals[l], ids[l]) as u8) << l;
             }
             let (tris, count) = &tables.cases[t.perm as usize][mask as usize];
+            // Records of the corners that own edges of the tetrahedron
+            // (local 0, 1, 2: an edge's lower end is never the last
+            // corner), looked up once per tetrahedron.
+            let mut rec = [t.rec as usize, usize::MAX, usize::MAX];
+            let mut rec_of = |l: usize, slot: &mut [u32], records: &mut Vec<VertexRecord>| {
+                if rec[l] == usize::MAX {
+                    rec[l] = record(slot, records, ids[l]);
+                }
+                rec[l]
+            };
             for tri in &tris[..*count as usize] {
                 for &(b, a) in tri {
                     // The tetrahedron is a monotone lattice path, so of two
@@ -366,7 +381,7 @@ impl<'f> ContourFollower<'f> {
                     // the later: the edge's lower-coordinate end.
                     let (lo, hi) = if b < a { (b, a) } else { (a, b) };
                     let (clo, chi) = (corners[lo as usize], corners[hi as usize]);
-                    let owner = record(slot, records, ids[lo as usize]);
+                    let owner = rec_of(lo as usize, slot, records);
                     let d = (chi ^ clo) as usize - 1;
                     let mut idx = records[owner].edge[d];
                     if idx == NO_VERTEX {
@@ -408,13 +423,19 @@ impl<'f> ContourFollower<'f> {
                     continue;
                 }
                 let origin = x[0] as u32 + sy * x[1] as u32 + sz * x[2] as u32;
-                let r = record(slot, records, origin);
+                // Faces 1, 2: the same cube; face 0: the cube of corner 1.
+                let r = match k {
+                    1 | 2 => rec_of(0, slot, records),
+                    0 => rec_of(1, slot, records),
+                    _ => record(slot, records, origin),
+                };
                 if records[r].tets & (1 << p) == 0 {
                     records[r].tets |= 1 << p;
-                    stack.push(TetRef {
+                    queue.push_back(TetRef {
                         origin,
                         xyz: [x[0] as u32, x[1] as u32, x[2] as u32],
                         perm: p,
+                        rec: r as u32,
                     });
                 }
             }

@@ -4,7 +4,7 @@
 //! whole volume, kept as the independent oracle of the tests.
 
 use super::follow::{ContourFollower, IdBuildHasher, TetTables};
-use super::seed::{PathSeed, arc_spans, path_seed};
+use super::seed::{PathSeed, PathSeeds, arc_spans};
 use super::{ContourMesh, Isovalue};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
@@ -25,9 +25,10 @@ pub fn spanning_arcs(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> 
 /// Every contour at `iso`, one mesh per spanning superarc, sorted by arc
 /// id. Contours are followed in parallel (see [`follow_all`]).
 pub fn all_contours(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ContourMesh> {
+    let path_seeds = PathSeeds::new();
     let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
         .into_iter()
-        .filter_map(|arc| path_seed(tree, field, arc, iso))
+        .filter_map(|arc| path_seeds.seed(tree, field, arc, iso))
         .collect();
     follow_all(field, &seeds, iso)
 }

@@ -45,7 +45,7 @@ pub mod topology;
 
 pub use follow::ContourFollower;
 pub use global::{all_contours, follow_all, marching_tetrahedra};
-pub use seed::{PathSeed, arc_spans, path_seed, path_seed_in_chain};
+pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;
 
 use crate::field::ScalarField;

@@ -1,0 +1,173 @@
+//! Criterion benches of contour extraction, what a user feels when
+//! dragging an isovalue: microseconds to a path seed, triangles per second
+//! to follow one contour (single-threaded), seconds to the whole
+//! isosurface at one value (every contour, in parallel). Run on the two
+//! MRI templates of the shared data folder, on the largest contour among a
+//! few isovalues, or on a synthetic cube without them.
+//!
+//! `cargo bench --bench contour` (set `FLEXISO_BENCH_VOLUMES=colin27_ch2`
+//! to bench only some of them). Before criterion's statistics it prints
+//! the best of several runs of each, which on a loaded machine is the
+//! fairer number; `FLEXISO_BENCH_QUICK=1` prints only that.
+
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
+use criterion::{Criterion, Throughput, criterion_group};
+use flexiso::contour::{
+    ContourFollower, Isovalue, PathSeed, PathSeeds, all_contours, global::spanning_arcs,
+};
+use flexiso::field::ScalarField;
+use flexiso::field::io::{ReadOptions, read_volume};
+use flexiso::field::synthetic::Synthetic;
+use flexiso::progress::Progress;
+use flexiso::tree::ContourTree;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+fn volumes() -> Vec<(String, ScalarField)> {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    let wanted = std::env::var("FLEXISO_BENCH_VOLUMES")
+        .unwrap_or_else(|_| "colin27_ch2,colin27_ch2better".to_owned());
+    let mut out = Vec::new();
+    for name in wanted.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        if let Ok(v) = read_volume(&data.join(format!("{name}.nrrd")), &ReadOptions::default()) {
+            out.push((name.to_owned(), v.field));
+        }
+    }
+    if out.is_empty() {
+        out.push(("synthetic-128".to_owned(), Synthetic::cube(128).generate()));
+    }
+    out
+}
+
+/// The isovalue (among a few across the range) with the largest single
+/// contour, and that contour's seed and size.
+fn largest_contour(tree: &ContourTree, field: &ScalarField) -> (Isovalue, PathSeed, usize) {
+    let (lo, hi) = field.range();
+    let mut best: Option<(Isovalue, PathSeed, usize)> = None;
+    let seeds = PathSeeds::new();
+    for k in 1..=6 {
+        let iso = Isovalue::new((lo + (hi - lo) * k as f64 / 8.0).round());
+        for c in all_contours(tree, field, iso) {
+            if best.as_ref().is_none_or(|b| c.num_triangles() > b.2) {
+                let seed = seeds.seed(tree, field, c.arc, iso).expect("spans");
+                best = Some((iso, seed, c.num_triangles()));
+            }
+        }
+    }
+    best.expect("some contour")
+}
+
+fn contour(c: &mut Criterion) {
+    for (name, field) in volumes() {
+        let t = Instant::now();
+        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+        let (iso, seed, triangles) = largest_contour(&tree, &field);
+        let spanning = spanning_arcs(&tree, &field, iso);
+        eprintln!(
+            "{name}: {} vertices, {} superarcs; largest contour at h = {}: {triangles} \
+             triangles; {} contours there (setup {:.1} s)",
+            field.len(),
+            tree.arcs().len(),
+            iso.value,
+            spanning.len(),
+            t.elapsed().as_secs_f64()
+        );
+        let mut g = c.benchmark_group(&name);
+        g.sample_size(10);
+        g.throughput(Throughput::Elements(spanning.len() as u64));
+        g.bench_function("path seeds of every contour at h", |b| {
+            let seeds = PathSeeds::new();
+            b.iter(|| {
+                for &a in &spanning {
+                    black_box(seeds.seed(&tree, &field, a, iso));
+                }
+            })
+        });
+        g.throughput(Throughput::Elements(triangles as u64));
+        g.bench_function("follow the largest contour (triangles, one thread)", |b| {
+            let mut follower = ContourFollower::new(&field);
+            b.iter(|| black_box(follower.follow(&seed, iso)))
+        });
+        g.bench_function("all contours at h (triangles of the largest)", |b| {
+            b.iter(|| black_box(all_contours(&tree, &field, iso)))
+        });
+        g.finish();
+    }
+}
+
+/// Best wall time of `runs` calls of `f`, seconds.
+fn best_of(runs: usize, mut f: impl FnMut()) -> f64 {
+    (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Nanoseconds this thread has run on a CPU (Linux schedstat), if known:
+/// on a loaded machine, the time the work itself took.
+fn thread_cpu_ns() -> Option<u64> {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// The best-of-N printout.
+fn quick() {
+    for (name, field) in volumes() {
+        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+        let (iso, seed, triangles) = largest_contour(&tree, &field);
+        let spanning = spanning_arcs(&tree, &field, iso);
+        let seeds = PathSeeds::new();
+        let t_seed = best_of(20, || {
+            for &a in &spanning {
+                black_box(seeds.seed(&tree, &field, a, iso));
+            }
+        }) / spanning.len().max(1) as f64;
+        let mut follower = ContourFollower::new(&field);
+        let mut cpu = f64::INFINITY;
+        let t_follow = best_of(7, || {
+            let c = thread_cpu_ns();
+            black_box(follower.follow(&seed, iso));
+            if let (Some(a), Some(b)) = (c, thread_cpu_ns()) {
+                cpu = cpu.min((b - a) as f64 * 1e-9);
+            }
+        });
+        let t_all = best_of(7, || {
+            black_box(all_contours(&tree, &field, iso));
+        });
+        println!(
+            "{name} h = {}: seed {:.2} us; largest contour {triangles} triangles in {:.3} s \
+             ({:.2} M triangles/s, one thread; on the CPU {:.3} s, {:.2} M/s); \
+             all {} contours in {:.3} s ({} threads)",
+            iso.value,
+            t_seed * 1e6,
+            t_follow,
+            triangles as f64 / t_follow / 1e6,
+            cpu,
+            triangles as f64 / cpu / 1e6,
+            spanning.len(),
+            t_all,
+            rayon::current_num_threads()
+        );
+    }
+}
+
+criterion_group!(benches, contour);
+
+fn main() {
+    quick();
+    if std::env::var("FLEXISO_BENCH_QUICK").as_deref() == Ok("1") {
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
