@@ -60,6 +60,8 @@ for _ in $(seq 1 120); do
 done
 [ -n "$WID" ] || fail "no window after 60 s"
 echo "window $WID"
+# No window manager under Xvfb: give the window the keyboard (shift-click).
+xdotool windowfocus --sync "$WID" 2>/dev/null || true
 
 # The dataset must load (the tree panel then dumps its arcs).
 for _ in $(seq 1 600); do

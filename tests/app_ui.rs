@@ -405,3 +405,29 @@ fn betti_numbers_arrive_in_the_background_for_the_tooltips() {
         assert!(!topo.segments(flexiso::tree::ArcId(a)).is_empty());
     }
 }
+
+#[test]
+fn another_measure_recomputes_the_simplification_and_keeps_the_selection() {
+    let (mut h, _) = explorer();
+    let (_, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let before = h.state().dataset().expect("dataset").sim.clone();
+    assert_eq!(before.measure(), flexiso::simplify::Measure::Hypervolume);
+    h.state_mut()
+        .set_measure(flexiso::simplify::Measure::Height);
+    assert!(
+        h.state().busy(),
+        "the simplification runs in the background"
+    );
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let app = h.state();
+    let ds = app.dataset().expect("dataset");
+    assert_eq!(ds.sim.measure(), flexiso::simplify::Measure::Height);
+    assert!(!std::sync::Arc::ptr_eq(&ds.sim, &before));
+    assert_eq!(app.selection().contours.len(), 1, "the selection stays");
+    assert_eq!(
+        app.tree_panel().drawn.arcs.len(),
+        app.level().expect("level").num_arcs()
+    );
+}

@@ -620,6 +620,24 @@ impl FlexisoApp {
         }
     }
 
+    /// Ranks the tree's leaves by another measure: the simplification is
+    /// recomputed in the background from the collapsed tree (the field is
+    /// not read again); the selection stays.
+    pub fn set_measure(&mut self, measure: Measure) {
+        if measure == self.measure {
+            return;
+        }
+        self.measure = measure;
+        if let Some(ds) = &self.dataset {
+            self.start(Request::Resimplify(Box::new(ds.clone())));
+        }
+    }
+
+    /// The measure ranking the leaves.
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
     /// Switches "all contours at h" on or off.
     pub fn set_show_all(&mut self, on: bool) {
         self.show_all = on;
@@ -689,12 +707,7 @@ impl FlexisoApp {
                         ui.selectable_value(&mut measure, m, m.name());
                     }
                 });
-            if measure != self.measure {
-                self.measure = measure;
-                if let Some(ds) = &self.dataset {
-                    self.start(Request::Resimplify(Box::new(ds.clone())));
-                }
-            }
+            self.set_measure(measure);
             ui.separator();
             if let Some(ds) = &self.dataset {
                 let (lo, hi) = ds.field.range();
