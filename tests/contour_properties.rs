@@ -3,8 +3,8 @@
 //! marching-tetrahedra pass over the whole volume.
 
 use flexiso::contour::{
-    ContourFollower, ContourMesh, Isovalue, MeshTopology, all_contours, marching_tetrahedra,
-    path_seed,
+    ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeeds, all_contours,
+    marching_tetrahedra, path_seed, path_seed_in_chain,
 };
 use flexiso::field::{ScalarField, Values};
 use flexiso::measure::betti::ContourTopology;
@@ -234,4 +234,70 @@ fn follower_is_reusable_and_seed_lies_on_the_contour() {
             assert_eq!(first, again);
         }
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Every spanning arc has a seed, on an edge the cut crosses, whose
+    /// contour is the arc's (the one all_contours extracts), whether the
+    /// arc has regular vertices or is bare (a join on top of a split).
+    #[test]
+    fn every_spanning_arc_has_a_seed_on_its_own_contour(
+        field in random_field(),
+        h in 0u32..14,
+    ) {
+        let tree = tree_of(&field);
+        let iso = Isovalue::new(h as f64 / 2.0);
+        let all = all_contours(&tree, &field, iso);
+        let seeds = PathSeeds::new();
+        let mut follower = ContourFollower::new(&field);
+        for c in &all {
+            let seed = path_seed(&tree, &field, c.arc, iso).expect("a spanning arc has a seed");
+            prop_assert_eq!(Some(seed), seeds.seed(&tree, &field, c.arc, iso));
+            prop_assert!(iso.is_above(&field, seed.above) && !iso.is_above(&field, seed.below));
+            let mine = follower.follow(&seed, iso);
+            prop_assert_eq!(&mine.indices, &c.indices);
+        }
+        for a in 0..tree.arcs().len() as u32 {
+            let spans = flexiso::contour::arc_spans(&tree, &field, ArcId(a), iso);
+            prop_assert_eq!(path_seed(&tree, &field, ArcId(a), iso).is_some(), spans);
+        }
+    }
+}
+
+#[test]
+fn seeds_in_simplified_chains_land_on_the_spanning_superarc() {
+    use flexiso::simplify::{Measure, Simplification, SimplifiedTree};
+    let field = flexiso::field::synthetic::Synthetic::cube(20)
+        .with_noise(0.05, 7)
+        .generate();
+    let tree = tree_of(&field);
+    let sim = std::sync::Arc::new(Simplification::new(&tree, &field, Measure::Volume));
+    let mut level = SimplifiedTree::new(sim);
+    level.set_level(6);
+    let (lo, hi) = field.range();
+    let mut follower = ContourFollower::new(&field);
+    let mut extracted = 0;
+    for k in 1..20 {
+        let iso = Isovalue::new(lo + (hi - lo) * k as f64 / 20.0);
+        for arc in level.arcs() {
+            let chain = arc.chain;
+            let spanning: Vec<ArcId> = chain
+                .iter()
+                .copied()
+                .filter(|&e| flexiso::contour::arc_spans(&tree, &field, e, iso))
+                .collect();
+            assert!(spanning.len() <= 1, "a chain is a monotone path");
+            let seed = path_seed_in_chain(&tree, &field, chain, iso);
+            assert_eq!(seed.map(|s| s.arc), spanning.first().copied());
+            if let Some(seed) = seed {
+                let c = follower.follow(&seed, iso);
+                let t = MeshTopology::of(&c.positions, &c.indices);
+                assert!(c.num_triangles() > 0 && t.components == 1);
+                extracted += 1;
+            }
+        }
+    }
+    assert!(extracted > 10, "the test exercised chains");
 }

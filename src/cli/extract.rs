@@ -28,6 +28,15 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// `println!` that ignores a closed standard output (`flexiso extract ...
+/// | head`): the printout is a report, the file is the product.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
+
 /// Arguments of `flexiso extract`.
 #[derive(clap::Args, Debug, Default)]
 pub struct Args {
@@ -102,7 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
     }
     let [x, y, z] = field.dims();
-    println!(
+    out!(
         "input:    {} ({}), {x} x {y} x {z}, values {lo} .. {hi} (load {load:.3} s)",
         volume.path.display(),
         volume.format
@@ -112,7 +121,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (tree, _) = ContourTree::from_field(field, &Progress::new())
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
     let targets = targets(&tree, field, &args)?;
-    println!(
+    out!(
         "tree:     {} superarcs{} ({:.3} s)",
         tree.arcs().len(),
         match args.simplify {
@@ -168,7 +177,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let extract = t.elapsed().as_secs_f64();
     let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();
-    println!(
+    out!(
         "seeds:    {} in {seeding:.4} s ({:.2} us each, {} arcs tested)",
         seeds.len(),
         seeding * 1e6 / seeds.len().max(1) as f64,
@@ -177,7 +186,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     contours.retain(|(_, m)| m.num_triangles() > 0);
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
     let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();
-    println!(
+    out!(
         "extract:  h = {h}: {} contour(s), {triangles} triangles in {extract:.4} s ({:.2} M triangles/s{})",
         contours.len(),
         triangles as f64 / extract.max(1e-9) / 1e6,
@@ -190,13 +199,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .par_iter()
         .map(|(_, m)| MeshTopology::of(&m.positions, &m.indices))
         .collect();
-    println!(
+    out!(
         "measure:  {:.3} s (Betti numbers of every superarc, topology of every contour)",
         t.elapsed().as_secs_f64()
     );
-    println!(
+    out!(
         "{:>23} {:>10} {:>10} {:>14} {:>14} {:>6} {:>6} {:>12}",
-        "arc", "triangles", "vertices", "area", "volume", "euler", "genus", "euler (tree)"
+        "arc",
+        "triangles",
+        "vertices",
+        "area",
+        "volume",
+        "euler",
+        "genus",
+        "euler (tree)"
     );
     for ((target, mesh), t) in contours.iter().zip(&topo) {
         let predicted = betti.at(mesh.arc, field, iso);
@@ -205,7 +221,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             "open".to_string()
         };
-        println!(
+        out!(
             "{:>23} {:>10} {:>10} {:>14.6} {:>14} {:>6} {:>6} {:>12}",
             format!("{}:{}", target.upper, target.lower),
             t.triangles,
@@ -226,7 +242,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .collect();
         let meshes: Vec<ContourMesh> = contours.into_iter().map(|(_, m)| m).collect();
         write_contours(out, &meshes, &names)?;
-        println!(
+        out!(
             "wrote:    {} ({} object(s), {:.3} s)",
             out.display(),
             meshes.len(),

@@ -104,6 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     if let Some(path) = &args.json {
         let mut json = crate::tree::json::tree_json(&tree, field);
+        crate::measure::betti::ContourTopology::new(&tree, field).add_to_json(&mut json);
         if let Some(obj) = json.as_object_mut() {
             obj.insert(
                 "collapsed".into(),
