@@ -47,7 +47,14 @@ fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
     h.drag_at(p);
     h.run_steps(1);
     h.drop_at(p);
-    h.run_steps(3);
+    settle(h);
+}
+
+/// Lets the contour extractions in flight finish and the panels redraw.
+fn settle(h: &mut Harness<'_, FlexisoApp>) {
+    h.run_steps(2);
+    h.state_mut().wait_for_extractions();
+    h.run_steps(2);
 }
 
 /// A drag from `a` to `b` in small moves.
@@ -61,7 +68,7 @@ fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
         h.run_steps(1);
     }
     h.drop_at(b);
-    h.run_steps(3);
+    settle(h);
 }
 
 /// The live arc spanning the widest range of values, and where the tree
@@ -160,7 +167,7 @@ fn shift_click_adds_a_second_contour_and_delete_removes_one() {
         },
         egui::Modifiers::SHIFT,
     );
-    h.run_steps(3);
+    settle(&mut h);
     assert_eq!(h.state().selection().contours.len(), 2, "shift-click adds");
     h.key_press(egui::Key::Delete);
     h.run_steps(2);
@@ -279,7 +286,7 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
         found.expect("the test volume has a join")
     };
     h.state_mut().select_arc(arc, true);
-    h.run_steps(2);
+    settle(&mut h);
     let marker = h.state().tree_panel().drawn.markers[0].1;
     // Just above the join: below the middle of every arc above it.
     let target_y = {

@@ -127,6 +127,8 @@ pub struct FlexisoApp {
     /// dataset is shown, on a worker), for the tree's tooltips.
     betti: Option<Arc<ContourTopology>>,
     betti_rx: Option<Receiver<(usize, Arc<ContourTopology>)>>,
+    /// The window's context (None in tests built without one).
+    ctx: Option<egui::Context>,
 }
 
 impl FlexisoApp {
@@ -157,23 +159,34 @@ impl FlexisoApp {
             sized_frames: 0,
             betti: None,
             betti_rx: None,
+            ctx: None,
         }
     }
 
     /// The window's app: starts `request` in the background at once.
     pub fn new(cc: &eframe::CreationContext<'_>, request: Request) -> Self {
         let mut app = Self::empty();
+        app.ctx = Some(cc.egui_ctx.clone());
         let ctx = cc.egui_ctx.clone();
-        app.pipeline
-            .set_notify(Arc::new(move || ctx.request_repaint()));
+        let notify: Arc<dyn Fn() + Send + Sync> = Arc::new(move || ctx.request_repaint());
+        app.pipeline.set_notify(Arc::clone(&notify));
+        app.selection
+            .set_extractor(selection::Extractor::new(Some(notify)));
         app.start(request);
         app
     }
 
+    /// Blocks until the contours being extracted are (tests).
+    pub fn wait_for_extractions(&mut self) {
+        self.selection.wait_for_extractions();
+    }
+
     /// An explorer on `field`, with the pipeline already run (tests: no
-    /// window needed).
+    /// window needed). Contours are extracted on a worker as in the
+    /// window: call [`FlexisoApp::wait_for_extractions`].
     pub fn new_for_test(field: ScalarField) -> Self {
         let mut app = Self::empty();
+        app.selection.set_extractor(selection::Extractor::new(None));
         let result = pipeline::run(
             Request::Field {
                 name: "test".into(),
@@ -333,7 +346,7 @@ impl FlexisoApp {
                     _ => level.set_level(DEFAULT_ARCS),
                 }
                 if !same_field {
-                    let (lo, hi) = ds.field.range();
+                    let (lo, hi) = ds.range;
                     self.global_h = 0.5 * (lo + hi);
                     self.selection.clear();
                     self.all = AllContours::default();
@@ -357,6 +370,12 @@ impl FlexisoApp {
                 self.info = (!ds.warnings.is_empty()).then(|| ds.warnings.join("; "));
                 if !same_field {
                     self.start_betti(&ds);
+                }
+                if let Some(ctx) = &self.ctx {
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!(
+                        "flexiso — {}",
+                        ds.name
+                    )));
                 }
                 self.level = Some(level);
                 self.dataset = Some(ds);
@@ -710,7 +729,7 @@ impl FlexisoApp {
             self.set_measure(measure);
             ui.separator();
             if let Some(ds) = &self.dataset {
-                let (lo, hi) = ds.field.range();
+                let (lo, hi) = ds.range;
                 ui.add(
                     egui::Slider::new(&mut self.global_h, lo..=hi)
                         .text("isovalue")
@@ -740,7 +759,7 @@ impl FlexisoApp {
             match (&self.dataset, &self.level) {
                 (Some(ds), Some(level)) => {
                     let [x, y, z] = ds.field.dims();
-                    let (lo, hi) = ds.field.range();
+                    let (lo, hi) = ds.range;
                     let t = ds.times;
                     ui.label(RichText::new(&ds.name).strong());
                     ui.label(format!(
@@ -870,9 +889,19 @@ impl FlexisoApp {
                                     }
                                 ));
                                 ui.label(
-                                    RichText::new(format!("extracted in {:.1} ms", c.extract_ms))
-                                        .weak(),
+                                    RichText::new(if c.extracting() {
+                                        "extracting…".to_string()
+                                    } else {
+                                        format!("extracted in {:.1} ms", c.extract_ms)
+                                    })
+                                    .weak(),
                                 );
+                            }
+                            None if c.extracting() => {
+                                ui.horizontal(|ui| {
+                                    ui.spinner();
+                                    ui.label("extracting…");
+                                });
                             }
                             None => {
                                 ui.label("no contour at this value");
@@ -917,6 +946,7 @@ impl eframe::App for FlexisoApp {
         }
         self.handle_dialogs();
         self.poll_betti();
+        self.selection.poll();
         self.handle_input(ui);
         let rs = frame.wgpu_render_state().cloned();
         let pointer_down = ui.input(|i| i.pointer.any_down());

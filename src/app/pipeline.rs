@@ -53,6 +53,9 @@ pub struct Dataset {
     pub format: String,
     /// The field.
     pub field: Arc<ScalarField>,
+    /// Its smallest and largest value (computed once: a scan of the
+    /// values is too slow for every frame of a big volume).
+    pub range: (f64, f64),
     /// Its contour tree.
     pub tree: Arc<ContourTree>,
     /// The collapsed tree (kept so another measure needs no field pass).
@@ -166,10 +169,12 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
         simplify,
         layout: t.elapsed(),
     };
+    let range = field.range();
     Ok(Dataset {
         name,
         path,
         format,
+        range,
         field,
         tree: Arc::new(tree),
         collapsed: Arc::new(collapsed),

@@ -8,7 +8,9 @@
 //! chain of superarcs, and its contour at h is the contour of the one
 //! superarc of the chain spanning h).
 
+use std::collections::HashMap;
 use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
 
 use egui::Color32;
 
@@ -55,6 +57,91 @@ pub struct Contour {
     pub version: u64,
     /// Milliseconds the last extraction took.
     pub extract_ms: f64,
+    /// Extraction requests made (the mesh shown answers `done` of them).
+    requested: u64,
+    done: u64,
+}
+
+impl Contour {
+    /// True while the mesh shown is older than the isovalue.
+    pub fn extracting(&self) -> bool {
+        self.done < self.requested
+    }
+}
+
+/// A contour to extract on the worker.
+struct Job {
+    id: u64,
+    request: u64,
+    superarc: ArcId,
+    h: f64,
+    field: Arc<ScalarField>,
+    tree: Arc<ContourTree>,
+}
+
+/// A worker's answer.
+struct Done {
+    id: u64,
+    request: u64,
+    mesh: Option<ContourMesh>,
+    topology: Option<MeshTopology>,
+    ms: f64,
+}
+
+/// Extracts contours on a worker thread, newest request per contour only:
+/// while an isovalue is dragged, requests that a newer one has replaced
+/// are skipped, so a contour of millions of triangles lags behind the
+/// pointer instead of freezing the window.
+pub struct Extractor {
+    tx: Sender<Job>,
+    rx: Receiver<Done>,
+}
+
+impl std::fmt::Debug for Extractor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Extractor")
+    }
+}
+
+impl Extractor {
+    /// Starts the worker; `notify` is called after each answer (egui:
+    /// request a repaint).
+    pub fn new(notify: Option<Arc<dyn Fn() + Send + Sync>>) -> Self {
+        let (tx, jobs) = channel::<Job>();
+        let (done_tx, rx) = channel::<Done>();
+        let _ = std::thread::Builder::new()
+            .name("flexiso-extract".into())
+            .spawn(move || {
+                while let Ok(first) = jobs.recv() {
+                    // Keep only the newest request of each contour.
+                    let mut latest: HashMap<u64, Job> = HashMap::new();
+                    latest.insert(first.id, first);
+                    while let Ok(j) = jobs.try_recv() {
+                        latest.insert(j.id, j);
+                    }
+                    let mut batch: Vec<Job> = latest.into_values().collect();
+                    batch.sort_by_key(|j| j.id);
+                    for j in batch {
+                        let t = std::time::Instant::now();
+                        let (mesh, topology) = extract_mesh(&j.field, &j.tree, j.superarc, j.h);
+                        let done = Done {
+                            id: j.id,
+                            request: j.request,
+                            mesh,
+                            topology,
+                            ms: t.elapsed().as_secs_f64() * 1e3,
+                        };
+                        if done_tx.send(done).is_err() {
+                            return;
+                        }
+                        if let Some(n) = &notify {
+                            n();
+                        }
+                    }
+                }
+            });
+        Self { tx, rx }
+    }
 }
 
 /// The selected contours and the global isovalue.
@@ -67,9 +154,85 @@ pub struct Selection {
     /// Only this contour is drawn, when set.
     pub isolated: Option<u64>,
     next_id: u64,
+    /// Extraction worker; without one, contours are extracted at once.
+    extractor: Option<Arc<Extractor>>,
 }
 
 impl Selection {
+    /// Extracts on a worker from now on (the window); without this call
+    /// every extraction happens at once on the caller's thread.
+    pub fn set_extractor(&mut self, e: Extractor) {
+        self.extractor = Some(Arc::new(e));
+    }
+
+    /// Installs the meshes the worker has finished; true if any.
+    pub fn poll(&mut self) -> bool {
+        let Some(e) = self.extractor.clone() else {
+            return false;
+        };
+        let mut any = false;
+        while let Ok(d) = e.rx.try_recv() {
+            any |= self.install(d);
+        }
+        any
+    }
+
+    /// Blocks until every requested extraction is installed (tests).
+    pub fn wait_for_extractions(&mut self) {
+        let Some(e) = self.extractor.clone() else {
+            return;
+        };
+        while self.contours.iter().any(Contour::extracting) {
+            match e.rx.recv_timeout(std::time::Duration::from_secs(60)) {
+                Ok(d) => {
+                    self.install(d);
+                }
+                Err(_) => return,
+            }
+        }
+    }
+
+    /// Number of contours whose mesh is being extracted.
+    pub fn extracting(&self) -> usize {
+        self.contours.iter().filter(|c| c.extracting()).count()
+    }
+
+    fn install(&mut self, d: Done) -> bool {
+        let Some(c) = self.get_mut(d.id) else {
+            return false;
+        };
+        // An older answer than one installed: drop it.
+        if d.request <= c.done {
+            return false;
+        }
+        c.done = d.request;
+        c.mesh = d.mesh.map(Arc::new);
+        c.topology = d.topology;
+        c.version += 1;
+        c.extract_ms = d.ms;
+        true
+    }
+
+    /// Extracts `c` (at once, or by the worker).
+    fn request(&self, field: &Arc<ScalarField>, tree: &Arc<ContourTree>, c: &mut Contour) {
+        c.requested += 1;
+        match &self.extractor {
+            Some(e) => {
+                let job = Job {
+                    id: c.id,
+                    request: c.requested,
+                    superarc: c.superarc,
+                    h: c.h,
+                    field: Arc::clone(field),
+                    tree: Arc::clone(tree),
+                };
+                if e.tx.send(job).is_err() {
+                    extract(field, tree, c);
+                }
+            }
+            None => extract(field, tree, c),
+        }
+    }
     /// The contour with this id.
     pub fn get(&self, id: u64) -> Option<&Contour> {
         self.contours.iter().find(|c| c.id == id)
@@ -84,8 +247,8 @@ impl Selection {
     /// its id. With `replace`, the previous selection is cleared first.
     pub fn add(
         &mut self,
-        field: &ScalarField,
-        tree: &ContourTree,
+        field: &Arc<ScalarField>,
+        tree: &Arc<ContourTree>,
         superarc: ArcId,
         h: f64,
         replace: bool,
@@ -122,8 +285,10 @@ impl Selection {
             topology: None,
             version: 0,
             extract_ms: 0.0,
+            requested: 0,
+            done: 0,
         };
-        extract(field, tree, &mut c);
+        self.request(field, tree, &mut c);
         self.contours.push(c);
         self.active = Some(id);
         id
@@ -132,18 +297,21 @@ impl Selection {
     /// Moves contour `id` to `(superarc, h)` and re-extracts it.
     pub fn move_to(
         &mut self,
-        field: &ScalarField,
-        tree: &ContourTree,
+        field: &Arc<ScalarField>,
+        tree: &Arc<ContourTree>,
         id: u64,
         superarc: ArcId,
         h: f64,
     ) {
-        if let Some(c) = self.get_mut(id)
-            && (c.superarc != superarc || c.h != h)
-        {
+        let Some(i) = self.contours.iter().position(|c| c.id == id) else {
+            return;
+        };
+        let mut c = self.contours[i].clone();
+        if c.superarc != superarc || c.h != h {
             c.superarc = superarc;
             c.h = h;
-            extract(field, tree, c);
+            self.request(field, tree, &mut c);
+            self.contours[i] = c;
         }
     }
 
@@ -154,8 +322,8 @@ impl Selection {
     /// moved are re-extracted.
     pub fn set_group(
         &mut self,
-        field: &ScalarField,
-        tree: &ContourTree,
+        field: &Arc<ScalarField>,
+        tree: &Arc<ContourTree>,
         lead: u64,
         positions: &[(ArcId, f64)],
     ) {
@@ -218,16 +386,30 @@ impl Selection {
     }
 }
 
-/// Extracts the contour of `c.superarc` at `c.h` into `c`.
-pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
-    let t = std::time::Instant::now();
-    let iso = Isovalue::new(c.h);
-    let mesh = path_seed(tree, field, c.superarc, iso)
+/// The contour of `superarc` at `h` and its measurements (None when the
+/// superarc does not span h).
+fn extract_mesh(
+    field: &ScalarField,
+    tree: &ContourTree,
+    superarc: ArcId,
+    h: f64,
+) -> (Option<ContourMesh>, Option<MeshTopology>) {
+    let iso = Isovalue::new(h);
+    let mesh = path_seed(tree, field, superarc, iso)
         .map(|seed| ContourFollower::new(field).follow(&seed, iso));
-    c.topology = mesh
+    let topology = mesh
         .as_ref()
         .map(|m| MeshTopology::of(&m.positions, &m.indices));
+    (mesh, topology)
+}
+
+/// Extracts the contour of `c.superarc` at `c.h` into `c`, at once.
+pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
+    let t = std::time::Instant::now();
+    let (mesh, topology) = extract_mesh(field, tree, c.superarc, c.h);
+    c.topology = topology;
     c.mesh = mesh.map(Arc::new);
     c.version += 1;
+    c.done = c.requested;
     c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
 }

@@ -208,7 +208,7 @@ impl TreePanel {
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
         let plot = Rect::from_min_max(rect.min + vec2(60.0, 14.0), rect.max - vec2(14.0, 14.0));
-        let (lo, hi) = ds.field.range();
+        let (lo, hi) = ds.range;
         let tf = Transform {
             plot,
             lo,

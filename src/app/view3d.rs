@@ -1,6 +1,7 @@
 //! The 3D view: the contours drawn by [`crate::render::Renderer`] into its
 //! own texture, shown as an egui image. Orbit camera: drag rotates, wheel
-//! zooms, right or middle drag pans, double-click fits the volume. A click
+//! zooms, right or middle drag pans, double-click fits the contours shown
+//! (again: the volume). A click
 //! on a surface picks it. Meshes are uploaded only when their version
 //! changes; styles cost a uniform write; a frame whose camera, size and
 //! scene are unchanged is not re-rendered.
@@ -53,6 +54,8 @@ pub struct View3d {
     pub last_render_ms: f64,
     /// Renders done (for tests and the frame log).
     pub renders: u64,
+    /// The last double-click fitted the contours (the next fits the box).
+    fitted_to_contours: bool,
 }
 
 impl Default for View3d {
@@ -77,6 +80,7 @@ impl View3d {
             problem: None,
             last_render_ms: 0.0,
             renders: 0,
+            fitted_to_contours: false,
         }
     }
 
@@ -177,7 +181,19 @@ impl View3d {
             }
         }
         if response.double_clicked() {
-            if let Some((lo, hi)) = self.bounds {
+            // Fit the contours shown; a second double-click fits the volume.
+            let contours = renderer.visible_bounds();
+            let target = match (contours, self.fitted_to_contours) {
+                (Some(b), false) => {
+                    self.fitted_to_contours = true;
+                    Some(b)
+                }
+                _ => {
+                    self.fitted_to_contours = false;
+                    self.bounds
+                }
+            };
+            if let Some((lo, hi)) = target {
                 self.camera.fit(lo, hi);
             }
         } else if response.clicked()
