@@ -155,14 +155,14 @@ pub struct Selection {
     pub isolated: Option<u64>,
     next_id: u64,
     /// Extraction worker; without one, contours are extracted at once.
-    extractor: Option<Arc<Extractor>>,
+    extractor: Option<std::rc::Rc<Extractor>>,
 }
 
 impl Selection {
     /// Extracts on a worker from now on (the window); without this call
     /// every extraction happens at once on the caller's thread.
     pub fn set_extractor(&mut self, e: Extractor) {
-        self.extractor = Some(Arc::new(e));
+        self.extractor = Some(std::rc::Rc::new(e));
     }
 
     /// Installs the meshes the worker has finished; true if any.
