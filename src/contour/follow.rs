@@ -29,7 +29,6 @@
 use super::{ContourMesh, Isovalue, PathSeed};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
-use std::collections::VecDeque;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::OnceLock;
 
@@ -213,7 +212,10 @@ pub struct ContourFollower<'f> {
     /// Per volume vertex: index of its record in `records`, if valid.
     slot: Vec<u32>,
     records: Vec<VertexRecord>,
-    queue: VecDeque<TetRef>,
+    /// Tetrahedra waiting, depth first: the last queued, a neighbour of
+    /// the one just done, comes next while its memory is still in cache
+    /// (measured faster than breadth first).
+    stack: Vec<TetRef>,
     /// Per contour vertex of the last contour: its mesh edge (below,
     /// above) and where on it, for the gradient normals.
     vertex_edges: Vec<(u32, u32, f32)>,
@@ -251,7 +253,7 @@ impl<'f> ContourFollower<'f> {
             spacing: field.spacing(),
             slot: Vec::new(),
             records: Vec::new(),
-            queue: VecDeque::new(),
+            stack: Vec::new(),
             vertex_edges: Vec::new(),
         }
     }
@@ -291,7 +293,7 @@ impl<'f> ContourFollower<'f> {
             self.records.shrink_to(2 * r);
         }
         self.records.clear();
-        self.queue.clear();
+        self.stack.clear();
         self.vertex_edges.clear();
     }
 
@@ -342,7 +344,7 @@ impl<'f> ContourFollower<'f> {
         let Self {
             slot,
             records,
-            queue,
+            stack,
             corner_offset,
             vertex_edges,
             ..
@@ -350,12 +352,12 @@ impl<'f> ContourFollower<'f> {
         let r = record(slot, records, start.origin);
         records[r].tets |= 1 << start.perm;
         start.rec = r as u32;
-        queue.push_back(start);
+        stack.push(start);
         let [nx, ny, nz] = self.dims.map(|d| d as i64 - 1);
         let spacing = self.spacing;
         let sy = self.dims[0] as u32;
         let sz = sy * self.dims[1] as u32;
-        while let Some(t) = queue.pop_front() {
+        while let Some(t) = stack.pop() {
             let corners = CUBE_TETRAHEDRA[t.perm as usize];
             let ids = corners.map(|c| t.origin + corner_offset[c as usize]);
             let vals = ids.map(|v| values[v as usize].to_f64());
@@ -431,7 +433,7 @@ impl<'f> ContourFollower<'f> {
                 };
                 if records[r].tets & (1 << p) == 0 {
                     records[r].tets |= 1 << p;
-                    queue.push_back(TetRef {
+                    stack.push(TetRef {
                         origin,
                         xyz: [x[0] as u32, x[1] as u32, x[2] as u32],
                         perm: p,

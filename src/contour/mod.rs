@@ -4,13 +4,15 @@
 //!
 //! * [`seed`]: an edge of the mesh the contour crosses, found in O(log n)
 //!   by binary search in the superarc's sorted regular vertices (and, for a
-//!   simplified arc, first in its chain of superarcs).
+//!   simplified arc, first in its chain of superarcs); [`PathSeeds`] keeps
+//!   what bare arcs need, for O(1) beyond the search.
 //! * [`follow`]: from that edge, a flood through the Freudenthal tetrahedra
 //!   the isovalue crosses, emitting marching-tetrahedra triangles; cost
 //!   proportional to the contour, never to the volume.
 //! * [`global`]: every contour at one isovalue (the classic isosurface, one
-//!   mesh per superarc, in parallel) and a plain marching-tetrahedra pass
-//!   over the whole volume, the oracle of the tests.
+//!   mesh per superarc, in parallel, one follower per worker thread) and a
+//!   plain marching-tetrahedra pass over the whole volume, the oracle of
+//!   the tests.
 //! * [`topology`]: vertices, edges, Euler characteristic, boundary,
 //!   orientation, area and volume of an extracted mesh.
 //! * [`export`]: binary PLY, OBJ and binary STL.
@@ -32,7 +34,8 @@
 //! **Orientation.** Triangles wind counter-clockwise seen from the *lower*
 //! side: their normals point downhill, towards lower values, i.e. outwards
 //! around a maximum (a bright organ in a scan, a blob). Vertex normals are
-//! area-weighted sums of triangle normals (see [`follow`] for why).
+//! the field's downhill gradient, or the area-weighted triangle normal
+//! where the gradient vanishes or disagrees (see [`follow`]).
 //!
 //! Only 3D grids (every axis at least 2 vertices) have tetrahedra; a 2D
 //! image yields empty contours.
