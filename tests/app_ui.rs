@@ -472,3 +472,25 @@ fn the_window_keeps_drawing_while_a_tree_builds_in_the_background() {
     );
     assert!(app.selection().contours.is_empty());
 }
+
+#[test]
+fn a_path_typed_in_the_open_window_loads_in_the_background() {
+    let (mut h, _) = explorer();
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("Open a path…").click();
+    h.run_steps(2);
+    h.get_by_label("Path:").click();
+    h.run_steps(1);
+    h.get_by_label("Path:").type_text("synthetic:24");
+    h.run_steps(1);
+    h.get_by_label("Open path").click();
+    h.run_steps(2);
+    assert!(h.state().busy(), "the volume loads in the background");
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let app = h.state();
+    assert_eq!(app.dataset().expect("opened").field.dims(), [24, 24, 24]);
+    assert_eq!(app.error(), None);
+    assert!(h.query_by_label("Open path").is_none(), "the window closed");
+}

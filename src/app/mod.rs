@@ -129,6 +129,9 @@ pub struct FlexisoApp {
     betti_rx: Option<Receiver<(usize, Arc<ContourTopology>)>>,
     /// The window's context (None in tests built without one).
     ctx: Option<egui::Context>,
+    /// The "Open a path" window and its field.
+    path_window: bool,
+    path_input: String,
 }
 
 impl FlexisoApp {
@@ -160,6 +163,8 @@ impl FlexisoApp {
             betti: None,
             betti_rx: None,
             ctx: None,
+            path_window: false,
+            path_input: String::new(),
         }
     }
 
@@ -702,6 +707,11 @@ impl FlexisoApp {
                 if ui.button("Open the built-in dataset").clicked() {
                     self.open("synthetic");
                 }
+                // Without a desktop portal or GTK the dialog cannot show:
+                // a typed path always works.
+                if ui.button("Open a path…").clicked() {
+                    self.path_window = true;
+                }
                 ui.separator();
                 if ui.button("Export contours (PLY/OBJ/STL)…").clicked() {
                     self.spawn_dialog("contours");
@@ -739,6 +749,37 @@ impl FlexisoApp {
                 self.all_checkbox = Some(r.rect);
             }
         });
+    }
+
+    fn path_window(&mut self, ctx: &egui::Context) {
+        if !self.path_window {
+            return;
+        }
+        let mut open = true;
+        let mut go = false;
+        egui::Window::new("Open a volume")
+            .open(&mut open)
+            .collapsible(false)
+            .show(ctx, |ui| {
+                ui.horizontal(|ui| {
+                    let label = ui.label("Path:");
+                    let r = ui
+                        .add(
+                            egui::TextEdit::singleline(&mut self.path_input)
+                                .hint_text("file, folder or synthetic:N")
+                                .desired_width(320.0),
+                        )
+                        .labelled_by(label.id);
+                    go |= r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+                });
+                go |= ui.button("Open path").clicked();
+            });
+        if go && !self.path_input.trim().is_empty() {
+            let p = self.path_input.trim().to_string();
+            self.open(&p);
+            open = false;
+        }
+        self.path_window = open;
     }
 
     fn status_bar(&mut self, ui: &mut egui::Ui) {
@@ -1020,6 +1061,7 @@ impl eframe::App for FlexisoApp {
                     }
                 }
             });
+        self.path_window(&ui.ctx().clone());
         self.save_screenshot(rs.as_ref());
         self.write_ui_dump(view_rect);
 
