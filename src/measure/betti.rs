@@ -345,3 +345,70 @@ impl ContourTopology {
         }
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::field::Values;
+    use crate::progress::Progress;
+
+    fn field(n: usize, f: impl Fn([f64; 3]) -> f64) -> ScalarField {
+        let mut v = Vec::new();
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let p = [x, y, z].map(|c| 2.0 * c as f64 / (n - 1) as f64 - 1.0);
+                    v.push(f(p) as f32);
+                }
+            }
+        }
+        ScalarField::new([n; 3], Values::F32(v)).unwrap()
+    }
+
+    /// The superarc holding the contour at `h` of a field with one.
+    fn only_contour(tree: &ContourTree, field: &ScalarField, h: f64) -> ArcId {
+        let arcs = crate::contour::global::spanning_arcs(tree, field, Isovalue::new(h));
+        assert_eq!(arcs.len(), 1);
+        arcs[0]
+    }
+
+    #[test]
+    fn a_blob_has_sphere_contours() {
+        let f = field(16, |p| {
+            -(p[0] * p[0] + 1.2 * p[1] * p[1] + 1.4 * p[2] * p[2])
+        });
+        let (tree, _) = ContourTree::from_field(&f, &Progress::new()).unwrap();
+        let topo = ContourTopology::new(&tree, &f);
+        let arc = only_contour(&tree, &f, -0.5);
+        let s = topo.at(arc, &f, Isovalue::new(-0.5));
+        assert_eq!(
+            (s.euler, s.closed(), s.betti(), s.genus()),
+            (2, true, [1, 0, 1], 0)
+        );
+    }
+
+    #[test]
+    fn a_ramp_has_open_disc_contours() {
+        let f = field(8, |p| p[0] + 0.3 * p[1] + 0.1 * p[2]);
+        let (tree, _) = ContourTree::from_field(&f, &Progress::new()).unwrap();
+        let topo = ContourTopology::new(&tree, &f);
+        let arc = only_contour(&tree, &f, 0.1);
+        let s = topo.at(arc, &f, Isovalue::new(0.1));
+        assert_eq!((s.euler, s.closed(), s.betti()), (1, false, [1, 0, 0]));
+    }
+
+    #[test]
+    fn json_gets_betti_per_arc() {
+        let f = field(10, |p| {
+            -(p[0] * p[0] + 1.2 * p[1] * p[1] + 1.4 * p[2] * p[2])
+        });
+        let (tree, _) = ContourTree::from_field(&f, &Progress::new()).unwrap();
+        let mut json = crate::tree::json::tree_json(&tree, &f);
+        ContourTopology::new(&tree, &f).add_to_json(&mut json);
+        for arc in json["arcs"].as_array().unwrap() {
+            assert_eq!(arc["betti"].as_array().unwrap().len(), 3);
+            assert!(arc["euler"].is_i64());
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Contours of real scans from the shared data folder (skipped when it is
+//! absent, unless FLEXISO_REQUIRE_DATA=1): at several isovalues, every
+//! contour is a connected, manifold, consistently oriented mesh whose Euler
+//! characteristic the tree predicts, and together they are the plain
+//! marching-tetrahedra isosurface.
+
+mod common;
+
+use flexiso::contour::{Isovalue, MeshTopology, all_contours, marching_tetrahedra};
+use flexiso::field::io::{ReadOptions, read_volume};
+use flexiso::measure::betti::ContourTopology;
+use flexiso::progress::Progress;
+use flexiso::tree::ContourTree;
+
+fn check_dataset(name: &str, isovalues: &[f64]) {
+    let Some(path) = common::dataset(name) else {
+        return;
+    };
+    let field = read_volume(&path, &ReadOptions::default())
+        .expect("readable")
+        .field;
+    let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+    let betti = ContourTopology::new(&tree, &field);
+    for &h in isovalues {
+        let iso = Isovalue::new(h);
+        let contours = all_contours(&tree, &field, iso);
+        let mut triangles = 0;
+        let mut area = 0.0;
+        for c in &contours {
+            let t = MeshTopology::of(&c.positions, &c.indices);
+            let at = format!("{name} h = {h}, arc {:?}", c.arc);
+            assert!(c.num_triangles() > 0, "{at}: empty");
+            assert_eq!(t.components, 1, "{at}: connected");
+            assert_eq!(
+                t.non_manifold_edges + t.non_manifold_vertices,
+                0,
+                "{at}: manifold"
+            );
+            assert_eq!(t.misoriented_edges, 0, "{at}: oriented");
+            assert_eq!(
+                t.is_closed(),
+                !c.touches_boundary,
+                "{at}: closed iff inside"
+            );
+            let predicted = betti.at(c.arc, &field, iso);
+            assert_eq!(t.euler, predicted.euler, "{at}: χ");
+            assert_eq!(t.is_closed(), predicted.closed(), "{at}: closedness");
+            triangles += c.num_triangles();
+            area += t.area;
+        }
+        let whole = marching_tetrahedra(&field, iso);
+        let w = MeshTopology::of(&whole.positions, &whole.indices);
+        assert_eq!(
+            triangles,
+            whole.num_triangles(),
+            "{name} h = {h}: triangles"
+        );
+        assert!(
+            (area - w.area).abs() <= 1e-6 * (1.0 + w.area),
+            "{name} h = {h}: area"
+        );
+        assert_eq!(contours.len(), w.components, "{name} h = {h}: components");
+    }
+}
+
+#[test]
+fn nucleon_contours_match_marching_tetrahedra_and_betti() {
+    check_dataset("nucleon.nrrd", &[20.0, 60.5, 128.0, 200.0]);
+}
+
+#[test]
+fn fuel_contours_match_marching_tetrahedra_and_betti() {
+    check_dataset("fuel.nrrd", &[10.0, 50.0, 99.5]);
+}
+
+#[test]
+fn neghip_contours_match_marching_tetrahedra_and_betti() {
+    check_dataset("neghip.nrrd", &[30.0, 80.0, 150.0]);
+}
