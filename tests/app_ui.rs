@@ -494,3 +494,24 @@ fn a_path_typed_in_the_open_window_loads_in_the_background() {
     assert_eq!(app.error(), None);
     assert!(h.query_by_label("Open path").is_none(), "the window closed");
 }
+
+#[test]
+fn opening_another_volume_cancels_the_running_job() {
+    let (mut h, _) = explorer();
+    h.state_mut().open("synthetic:160");
+    h.run_steps(2);
+    h.state_mut().open("synthetic:20");
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let app = h.state();
+    assert_eq!(app.error(), None, "a cancelled job is no error");
+    assert_eq!(app.dataset().expect("opened").field.dims(), [20, 20, 20]);
+    // The cancelled job's late result never replaces it.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    h.run_steps(3);
+    assert_eq!(
+        h.state().dataset().expect("still").field.dims(),
+        [20, 20, 20]
+    );
+    assert!(!h.state().busy());
+}

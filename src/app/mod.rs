@@ -828,6 +828,11 @@ impl FlexisoApp {
                         "ui {:.1} ms  3D {:.1} ms",
                         self.ui_ms, self.view3d.last_render_ms
                     ));
+                    let n = self.selection.extracting();
+                    if n > 0 {
+                        ui.spinner();
+                        ui.label(format!("extracting {n} contour(s)"));
+                    }
                     if self.all.pending.is_some() {
                         ui.spinner();
                         ui.label("extracting all contours at h…");
