@@ -112,7 +112,7 @@ shot 02_selected.png
 
 read -r mx my <<<"$(awk '$1 == "marker" { print $3, $4; exit }' "$DUMP")"
 if [ -n "${mx:-}" ]; then
-  drag "$mx" "$my" "$mx" $((my - ah / 4))
+  drag "$mx" "$my" "$mx" $((my - ah / 8))
   shot 03_dragged.png
 fi
 
