@@ -23,9 +23,22 @@ if [ ! -x "$BIN" ] || [ -n "$(find src -newer "$BIN" -name '*.rs' | head -1)" ];
   cargo build --release
 fi
 
-DISP=":${FLEXISO_DISPLAY:-97}"
-Xvfb "$DISP" -screen 0 1600x1000x24 -nolisten tcp >"$OUT/xvfb.log" 2>&1 &
-XVFB_PID=$!
+# A free display: FLEXISO_DISPLAY if given, else the first Xvfb picks.
+if [ -n "${FLEXISO_DISPLAY:-}" ]; then
+  DISP=":$FLEXISO_DISPLAY"
+  Xvfb "$DISP" -screen 0 1600x1000x24 -nolisten tcp >"$OUT/xvfb.log" 2>&1 &
+  XVFB_PID=$!
+else
+  rm -f "$OUT/display"
+  Xvfb -displayfd 3 -screen 0 1600x1000x24 -nolisten tcp 3>"$OUT/display" >"$OUT/xvfb.log" 2>&1 &
+  XVFB_PID=$!
+  for _ in $(seq 1 50); do
+    [ -s "$OUT/display" ] && break
+    sleep 0.1
+  done
+  [ -s "$OUT/display" ] || { echo "screenshot.sh: Xvfb did not start" >&2; cat "$OUT/xvfb.log" >&2; exit 1; }
+  DISP=":$(head -1 "$OUT/display")"
+fi
 APP_PID=""
 cleanup() {
   if [ -n "$APP_PID" ]; then kill "$APP_PID" 2>/dev/null || true; fi
