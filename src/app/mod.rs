@@ -46,6 +46,22 @@ use view3d::{SceneMesh, View3d};
 /// contours use small ids).
 const ALL_CONTOURS_ID: u64 = 1 << 40;
 
+/// The controls, as the Help menu shows them.
+pub const CONTROLS: &str = "\
+Tree: click an arc to see its contour (at the isovalue line when the arc \
+spans it, else at the arc's middle); shift-click adds one. Drag a marker \
+to move its contour's isovalue: past a node it follows the level set (it \
+splits going up through a join, contours that meet merge). Drag the \
+dashed line to move the isovalue. Wheel zooms, right or middle drag pans, \
+double-click resets.
+Curve: drag on it, or the slider, to simplify the tree (log-log: arcs \
+against feature size).
+3D view: drag rotates, wheel zooms, right or middle drag pans, \
+double-click fits the contours (again: the volume); click a surface to \
+pick it.
+Keys: Ctrl+O opens, Delete removes the active contour, Escape clears. \
+Drop a volume file on the window to open it.";
+
 /// How many arcs the tree shows when a dataset opens.
 pub const DEFAULT_ARCS: usize = 100;
 
@@ -726,6 +742,9 @@ impl FlexisoApp {
                 if ui.button("Quit").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
+            });
+            ui.menu_button("Help", |ui| {
+                ui.label(CONTROLS);
             });
             ui.separator();
             let mut measure = self.measure;
