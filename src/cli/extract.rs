@@ -178,10 +178,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let extract = t.elapsed().as_secs_f64();
     let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();
     out!(
-        "seeds:    {} in {seeding:.4} s ({:.2} us each, {} arcs tested)",
+        "seeds:    {} of {} arcs span h, found in {seeding:.4} s ({:.2} us per arc tested)",
         seeds.len(),
-        seeding * 1e6 / seeds.len().max(1) as f64,
-        targets.len()
+        targets.len(),
+        seeding * 1e6 / targets.len().max(1) as f64
     );
     contours.retain(|(_, m)| m.num_triangles() > 0);
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
