@@ -515,3 +515,39 @@ fn opening_another_volume_cancels_the_running_job() {
     );
     assert!(!h.state().busy());
 }
+
+/// A file dropped on the window, as the windowing integration hands it over.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn a_volume_dropped_on_the_window_opens() {
+    let (mut h, _) = explorer();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("blob.nrrd");
+    let mut bytes =
+        b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 6 5 4\nencoding: raw\n\n".to_vec();
+    bytes.extend((0..6 * 5 * 4).map(|i: u32| ((i * 37) % 251) as u8));
+    std::fs::write(&path, bytes).expect("write");
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(path)));
+    h.run_steps(1);
+    assert!(h.state().busy(), "the dropped file loads in the background");
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let app = h.state();
+    assert_eq!(app.error(), None);
+    let ds = app.dataset().expect("opened");
+    assert_eq!(ds.name, "blob.nrrd");
+    assert_eq!(ds.field.dims(), [6, 5, 4]);
+}
