@@ -678,6 +678,14 @@ impl FlexisoApp {
         self.measure
     }
 
+    /// Moves to the simplest level with at most `arcs` arcs (tests,
+    /// scripts; the curve panel does this on a drag).
+    pub fn set_level_arcs(&mut self, arcs: usize) {
+        if let Some(level) = &mut self.level {
+            level.set_level(arcs);
+        }
+    }
+
     /// Switches "all contours at h" on or off.
     pub fn set_show_all(&mut self, on: bool) {
         self.show_all = on;
