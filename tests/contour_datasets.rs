@@ -1,12 +1,14 @@
 //! Contours of real scans from the shared data folder (skipped when it is
 //! absent, unless FLEXISO_REQUIRE_DATA=1): at several isovalues, every
 //! contour is a connected, manifold, consistently oriented mesh whose Euler
-//! characteristic the tree predicts, and together they are the plain
-//! marching-tetrahedra isosurface.
+//! characteristic the tree predicts, the same as following each seed
+//! gives, and together they are the plain marching-tetrahedra isosurface.
 
 mod common;
 
-use flexiso::contour::{Isovalue, MeshTopology, all_contours, marching_tetrahedra};
+use flexiso::contour::{
+    Isovalue, MeshTopology, all_contours, all_contours_by_following, marching_tetrahedra,
+};
 use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::measure::betti::ContourTopology;
 use flexiso::progress::Progress;
@@ -24,6 +26,14 @@ fn check_dataset(name: &str, isovalues: &[f64]) {
     for &h in isovalues {
         let iso = Isovalue::new(h);
         let contours = all_contours(&tree, &field, iso);
+        // The parallel sweep names every contour as following its seed does.
+        let followed = all_contours_by_following(&tree, &field, iso);
+        assert_eq!(contours.len(), followed.len(), "{name} h = {h}: contours");
+        for (c, f) in contours.iter().zip(&followed) {
+            assert_eq!((c.arc, c.touches_boundary), (f.arc, f.touches_boundary));
+            assert_eq!(c.num_triangles(), f.num_triangles(), "{name} h = {h}");
+            assert_eq!(c.positions.len(), f.positions.len(), "{name} h = {h}");
+        }
         let mut triangles = 0;
         let mut area = 0.0;
         for c in &contours {

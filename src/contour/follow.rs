@@ -462,10 +462,48 @@ pub fn gradient_normals<T: Scalar>(
     indices: &[u32],
 ) -> Vec<[f32; 3]> {
     let mut normals = vertex_normals(positions, indices);
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    let gradient = |v: u32| -> [f64; 3] {
+    apply_gradient_normals(values, dims, spacing, vertex_edges, &mut normals);
+    normals
+}
+
+/// The gradient half of [`gradient_normals`]: replaces each unit normal in
+/// `normals` (area-weighted, of the vertex on `vertex_edges[i]`) by the
+/// downhill gradient where that agrees with it.
+fn apply_gradient_normals<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    vertex_edges: &[(u32, u32, f32)],
+    normals: &mut [[f32; 3]],
+) {
+    let coords = |v: u32| {
         let v = v as usize;
-        let c = [v % dims[0], v / dims[0] % dims[1], v / stride[2]];
+        (
+            v,
+            [v % dims[0], v / dims[0] % dims[1], v / (dims[0] * dims[1])],
+        )
+    };
+    for (n, &(b, a, s)) in normals.iter_mut().zip(vertex_edges) {
+        let g = downhill(values, dims, spacing, coords(b), coords(a), s as f64);
+        prefer_gradient(n, g);
+    }
+}
+
+/// The unit downhill direction at the contour vertex a fraction `s` from
+/// `below` to `above` (each a vertex id with its coordinates): the field's
+/// gradients at the two ends (central differences, one-sided on the box's
+/// faces), interpolated and negated. `None` where it vanishes.
+#[inline]
+pub(crate) fn downhill<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    below: (usize, [usize; 3]),
+    above: (usize, [usize; 3]),
+    s: f64,
+) -> Option<[f32; 3]> {
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let gradient = |(v, c): (usize, [usize; 3])| -> [f64; 3] {
         std::array::from_fn(|k| {
             let lo = if c[k] > 0 { v - stride[k] } else { v };
             let hi = if c[k] + 1 < dims[k] { v + stride[k] } else { v };
@@ -477,19 +515,21 @@ pub fn gradient_normals<T: Scalar>(
             }
         })
     };
-    for (n, &(b, a, s)) in normals.iter_mut().zip(vertex_edges) {
-        let (gb, ga) = (gradient(b), gradient(a));
-        let s = s as f64;
-        let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])));
-        let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-        if l > 0.0 && l.is_finite() {
-            let g = g.map(|x| (x / l) as f32);
-            if g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0.0 {
-                *n = g;
-            }
-        }
+    let (gb, ga) = (gradient(below), gradient(above));
+    let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])));
+    let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    (l > 0.0 && l.is_finite()).then(|| g.map(|x| (x / l) as f32))
+}
+
+/// Takes the downhill gradient `g` for the unit normal `n` (area-weighted,
+/// from the triangles) where it agrees with the triangles' winding.
+#[inline]
+pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
+    if let Some(g) = g
+        && g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0.0
+    {
+        *n = g;
     }
-    normals
 }
 
 /// Unit vertex normals as area-weighted sums of the triangle normals (a
@@ -512,7 +552,13 @@ pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> 
             s[2] += n[2];
         }
     }
-    for n in &mut acc {
+    normalize(&mut acc);
+    acc
+}
+
+/// Scales each normal to unit length (a zero or non-finite one becomes +z).
+pub(crate) fn normalize(normals: &mut [[f32; 3]]) {
+    for n in normals {
         let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
         *n = if l > 0.0 && l.is_finite() {
             [n[0] / l, n[1] / l, n[2] / l]
@@ -520,7 +566,6 @@ pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> 
             [0.0, 0.0, 1.0]
         };
     }
-    acc
 }
 
 #[cfg(test)]

@@ -23,8 +23,32 @@ pub fn spanning_arcs(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> 
 }
 
 /// Every contour at `iso`, one mesh per spanning superarc, sorted by arc
-/// id. Contours are followed in parallel (see [`follow_all`]).
+/// id: one parallel sweep over the volume whose components are named by
+/// the arcs' path seeds (see [`super::sweep`]). Where that cannot name
+/// them one to one (it never should), the contours are followed from
+/// their seeds instead ([`follow_all`]).
 pub fn all_contours(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ContourMesh> {
+    let path_seeds = PathSeeds::new();
+    let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
+        .into_iter()
+        .filter_map(|arc| path_seeds.seed(tree, field, arc, iso))
+        .collect();
+    super::sweep::all_contours_by_sweep(field, &seeds, iso).unwrap_or_else(|| {
+        debug_assert!(
+            field.dims().iter().any(|&d| d < 2),
+            "contours at {iso:?} do not match the tree's spanning arcs"
+        );
+        follow_all(field, &seeds, iso)
+    })
+}
+
+/// [`all_contours`] by following every contour from its path seed, in
+/// parallel: the independent way, kept for the tests.
+pub fn all_contours_by_following(
+    tree: &ContourTree,
+    field: &ScalarField,
+    iso: Isovalue,
+) -> Vec<ContourMesh> {
     let path_seeds = PathSeeds::new();
     let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
         .into_iter()

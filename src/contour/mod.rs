@@ -44,10 +44,11 @@ pub mod export;
 pub mod follow;
 pub mod global;
 pub mod seed;
+mod sweep;
 pub mod topology;
 
 pub use follow::ContourFollower;
-pub use global::{all_contours, follow_all, marching_tetrahedra};
+pub use global::{all_contours, all_contours_by_following, follow_all, marching_tetrahedra};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;
 

@@ -1,0 +1,605 @@
+//! Every contour at one isovalue by one parallel sweep over the volume:
+//! the fast path of [`all_contours`](super::all_contours).
+//!
+//! Following each contour from its path seed costs time proportional to
+//! the contour, which is what picking one arc wants. The whole isosurface
+//! is another matter: on a brain scan one contour holds almost every
+//! triangle, so following runs on one core however many contours there
+//! are. Here the volume is cut into slabs of cube layers that the cores
+//! march at once, and the contours are told apart afterwards:
+//!
+//! 1. **Crossed edges, plane by plane.** A mesh edge `(v, v + d)` (`d` one
+//!    of the seven 0/1 offsets: every edge of the Freudenthal mesh once)
+//!    belongs to the plane of `v`, its lower end, and is crossed when its
+//!    ends lie on either side of the cut. One byte per vertex, the corners
+//!    of its cube above the cut, says which; counting them per row numbers
+//!    every contour vertex (in order of lower end, then offset) without a
+//!    list of edges.
+//! 2. **Triangles, slab by slab.** A cube layer reads the vertex ids of the
+//!    edges owned by its two planes from a dense table per plane, refilled
+//!    from the cube bytes (never cleared: only crossed edges are read). The
+//!    case tables are the follower's, so winding and interpolation agree
+//!    triangle for triangle. Triangles are counted per layer first and
+//!    written straight into one array.
+//! 3. **Components** by union-find over triangle edges: inside a slab on
+//!    the slab's own vertices (in parallel), then the layers that join two
+//!    slabs. Linking the larger root under the smaller makes every parent
+//!    smaller than its child, so one ascending pass labels everything.
+//! 4. **Arcs.** A component is the contour of the superarc whose path seed
+//!    lies on it: the seed's edge is numbered from its row's count. The
+//!    tree promises one component per spanning arc; if that ever failed,
+//!    the caller falls back to following, never to a wrong label.
+//!
+//! **Memory is time here:** the first touch of a fresh page costs about as
+//! much as the work done on it, so the largest contour (on a scan, nearly
+//! all of the isosurface) is compacted in place in the sweep's own arrays
+//! instead of copied out, and nothing per edge is kept but the outputs:
+//! beyond them, two bytes per volume vertex (which side of the cut, the
+//! cube masks), 20 bytes per contour vertex (downhill gradient, root and
+//! label) and two dense tables of one plane per worker.
+
+use super::follow::{TetTables, downhill, normalize, prefer_gradient};
+use super::{ContourMesh, Isovalue, PathSeed};
+use crate::field::{Scalar, ScalarField};
+use crate::mesh::CUBE_TETRAHEDRA;
+use crate::tree::ArcId;
+use rayon::prelude::*;
+use std::sync::OnceLock;
+
+/// One triangle corner of a marching-tetrahedra case, as the edge it lies
+/// on: the cube corner (bit mask) owning the edge and the edge's offset
+/// (bit mask) from it.
+type CornerEdge = (u8, u8);
+
+/// Per tetrahedron of the cube: its local mask from the cube's mask of
+/// corners above the cut, and its triangles per local mask.
+struct SweepTables {
+    /// `tet_mask[p][cube]`: bit `l` set when local corner `l` of
+    /// tetrahedron `p` is above.
+    tet_mask: [[u8; 256]; 6],
+    /// `pieces[p][mask]`: up to two triangles, three corner edges each.
+    pieces: [[([[CornerEdge; 3]; 2], u8); 16]; 6],
+    /// Triangles in a cube, per cube mask.
+    triangles: [u8; 256],
+}
+
+impl SweepTables {
+    fn get() -> &'static SweepTables {
+        static T: OnceLock<SweepTables> = OnceLock::new();
+        T.get_or_init(|| {
+            let cases = &TetTables::get().cases;
+            let mut tet_mask = [[0u8; 256]; 6];
+            let mut pieces = [[([[(0u8, 0u8); 3]; 2], 0u8); 16]; 6];
+            for (p, corners) in CUBE_TETRAHEDRA.iter().enumerate() {
+                for (cube, m) in tet_mask[p].iter_mut().enumerate() {
+                    for (l, &c) in corners.iter().enumerate() {
+                        *m |= ((cube >> c & 1) as u8) << l;
+                    }
+                }
+                for mask in 0..16 {
+                    let (tris, count) = &cases[p][mask];
+                    pieces[p][mask].1 = *count;
+                    for (t, tri) in tris.iter().enumerate().take(*count as usize) {
+                        for (k, &(b, a)) in tri.iter().enumerate() {
+                            // Corners along a monotone lattice path: the
+                            // earlier is the edge's lower end.
+                            let (lo, hi) = (b.min(a) as usize, b.max(a) as usize);
+                            let (clo, chi) = (corners[lo], corners[hi]);
+                            pieces[p][mask].0[t][k] = (clo, chi ^ clo);
+                        }
+                    }
+                }
+            }
+            let triangles = std::array::from_fn(|cube| {
+                (0..6)
+                    .map(|p| pieces[p][tet_mask[p][cube] as usize].1)
+                    .sum()
+            });
+            SweepTables {
+                tet_mask,
+                pieces,
+                triangles,
+            }
+        })
+    }
+}
+
+/// What the sweep shares between its workers.
+struct Sweep<'a> {
+    dims: [usize; 3],
+    /// Per volume vertex: the corners of its cube above the cut (bit `m`
+    /// for corner offset `m`; corners beyond the box copy the vertex).
+    cubes: &'a [u8],
+    /// `row_base[y + ny * z]`: id of the first contour vertex owned by the
+    /// row; one more entry, the number of contour vertices.
+    row_base: &'a [u32],
+}
+
+/// The edge offsets `d` (bits 1..7) of a vertex's cube whose far end lies
+/// on the other side of the cut than the vertex (bit 0).
+#[inline(always)]
+fn crossed(cube: u8) -> u8 {
+    (cube ^ (cube & 1).wrapping_neg()) & 0xfe
+}
+
+/// Every contour at `iso`, one mesh per seed's arc, sorted by arc; `None`
+/// when the components and the seeds do not match one to one (then the
+/// caller follows each seed instead).
+pub(crate) fn all_contours_by_sweep(
+    field: &ScalarField,
+    seeds: &[PathSeed],
+    iso: Isovalue,
+) -> Option<Vec<ContourMesh>> {
+    let dims = field.dims();
+    if dims.iter().any(|&d| d < 2) {
+        return None;
+    }
+    crate::with_values!(field.values(), v => sweep(v.as_slice(), field, seeds, iso))
+}
+
+/// `s` cut into consecutive pieces of the given lengths.
+fn split_lengths<T>(mut s: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    for len in lengths {
+        let (head, tail) = std::mem::take(&mut s).split_at_mut(len);
+        out.push(head);
+        s = tail;
+    }
+    out
+}
+
+/// Exclusive prefix sums of `counts`, with the total appended; `None` when
+/// the total passes `limit`.
+fn prefix_sums(counts: impl Iterator<Item = usize>, limit: usize) -> Option<Vec<u32>> {
+    let mut out = vec![0u32];
+    let mut total = 0usize;
+    for c in counts {
+        total += c;
+        if total > limit {
+            return None;
+        }
+        out.push(total as u32);
+    }
+    Some(out)
+}
+
+fn sweep<T: Scalar>(
+    values: &[T],
+    field: &ScalarField,
+    seeds: &[PathSeed],
+    iso: Isovalue,
+) -> Option<Vec<ContourMesh>> {
+    let [nx, ny, nz] = field.dims();
+    let plane = nx * ny;
+    let above: Vec<u8> = values
+        .par_iter()
+        .enumerate()
+        .map(|(v, f)| iso.above_value(f.to_f64(), v as u32) as u8)
+        .collect();
+    let mut cubes = vec![0u8; values.len()];
+    cubes
+        .par_chunks_mut(plane)
+        .enumerate()
+        .for_each(|(z, c)| cube_masks(&above, field.dims(), z, c));
+    drop(above);
+
+    // 1. Contour vertices, counted per row, then filled plane by plane.
+    let row_counts: Vec<usize> = cubes
+        .par_chunks(nx)
+        .map(|row| row.iter().map(|&m| crossed(m).count_ones() as usize).sum())
+        .collect();
+    // Triangle ids and vertex ids both fit in u32 (and root/label arrays
+    // stay addressable); beyond that the follower takes over.
+    let row_base = prefix_sums(row_counts.into_iter(), u32::MAX as usize / 4)?;
+    let n = row_base[row_base.len() - 1] as usize;
+    let plane_lengths: Vec<usize> = (0..nz)
+        .map(|z| (row_base[(z + 1) * ny] - row_base[z * ny]) as usize)
+        .collect();
+    // Fresh zeroed pages: each is first touched by a write, in parallel
+    // (a read first maps the shared zero page, and the write after it then
+    // costs a copy and a TLB shootdown on every core).
+    let mut positions = vec![[0f32; 3]; n];
+    let mut downhill = vec![[0f32; 3]; n];
+    let mut on_face = vec![false; n];
+    let mut normals = vec![[0f32; 3]; n];
+    let lengths = || plane_lengths.iter().copied();
+    split_lengths(&mut positions, lengths())
+        .into_par_iter()
+        .zip(split_lengths(&mut downhill, lengths()))
+        .zip(split_lengths(&mut on_face, lengths()))
+        .zip(split_lengths(&mut normals, lengths()))
+        .enumerate()
+        .for_each(|(z, (((p, g), f), n))| {
+            n.fill([0.0; 3]);
+            crossed_edges(values, field, &cubes, iso, z, p, g, f)
+        });
+
+    // 2. Triangles, counted per cube layer, then written slab by slab.
+    let tables = SweepTables::get();
+    let layer_triangles: Vec<usize> = (0..nz - 1)
+        .into_par_iter()
+        .map(|z| {
+            let mut t = 0usize;
+            for y in 0..ny - 1 {
+                let row = &cubes[nx * (y + ny * z)..][..nx - 1];
+                t += row
+                    .iter()
+                    .map(|&c| tables.triangles[c as usize] as usize)
+                    .sum::<usize>();
+            }
+            t
+        })
+        .collect();
+    let layer_start = prefix_sums(layer_triangles.iter().map(|t| 3 * t), u32::MAX as usize)?;
+    let mut indices = vec![0u32; layer_start[nz - 1] as usize];
+    let ctx = Sweep {
+        dims: field.dims(),
+        cubes: &cubes,
+        row_base: &row_base,
+    };
+    let layers = nz - 1;
+    let slabs = layers.min(4 * rayon::current_num_threads()).max(1);
+    let cut: Vec<usize> = (0..=slabs).map(|s| s * layers / slabs).collect();
+    // A slab owns the planes of its layers; the last one also the top one.
+    let end_plane = |s: usize| if s + 1 == slabs { nz } else { cut[s + 1] };
+    let vertex_start = |z: usize| row_base[z * ny] as usize;
+    let slab_vertices = (0..slabs).map(|s| vertex_start(end_plane(s)) - vertex_start(cut[s]));
+    let slab_indices = (0..slabs).map(|s| (layer_start[cut[s + 1]] - layer_start[cut[s]]) as usize);
+    let mut parent: Vec<u32> = (0..n as u32).into_par_iter().collect();
+    split_lengths(&mut parent, slab_vertices.clone())
+        .into_par_iter()
+        .zip(split_lengths(&mut normals, slab_vertices))
+        .zip(split_lengths(&mut indices, slab_indices))
+        .enumerate()
+        .for_each(|(s, ((parent, normals), indices))| {
+            let written = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start);
+            debug_assert_eq!(written, indices.len(), "triangles as counted");
+            // 3. Unions inside the slab: all but the last layer, whose
+            // triangles reach the next slab's first plane.
+            let inner = if s + 1 == slabs {
+                indices.len()
+            } else {
+                (layer_start[cut[s + 1] - 1] - layer_start[cut[s]]) as usize
+            };
+            let first = vertex_start(cut[s]) as u32;
+            for tri in indices[..inner].chunks_exact(3) {
+                add_triangle(parent, normals, &positions, first, tri);
+            }
+        });
+    for s in 0..slabs - 1 {
+        let last = cut[s + 1] - 1;
+        let range = layer_start[last] as usize..layer_start[last + 1] as usize;
+        for tri in indices[range].chunks_exact(3) {
+            add_triangle(&mut parent, &mut normals, &positions, 0, tri);
+        }
+    }
+    normals
+        .par_chunks_mut(1 << 14)
+        .zip(downhill.par_chunks(1 << 14))
+        .for_each(|(normals, downhill)| {
+            normalize(normals);
+            for (n, g) in normals.iter_mut().zip(downhill) {
+                prefer_gradient(n, (*g != [0.0; 3]).then_some(*g));
+            }
+        });
+    drop(downhill);
+
+    // Components: parents point down, so one ascending pass finds roots.
+    let mut label = Vec::with_capacity(n);
+    let mut components = 0u32;
+    for i in 0..n {
+        let p = parent[parent[i] as usize];
+        parent[i] = p;
+        if p as usize == i {
+            label.push(components);
+            components += 1;
+        } else {
+            label.push(label[p as usize]);
+        }
+    }
+
+    // 4. The arc of each component, from its seed.
+    if components as usize != seeds.len() {
+        return None;
+    }
+    let mut arc_of = vec![None; components as usize];
+    for seed in seeds {
+        let id = edge_id(
+            field,
+            &ctx,
+            seed.below.min(seed.above),
+            seed.below.max(seed.above),
+        )?;
+        let c = &mut arc_of[label[id as usize] as usize];
+        if c.is_some() {
+            return None;
+        }
+        *c = Some(seed.arc);
+    }
+    let arcs: Vec<ArcId> = arc_of.into_iter().collect::<Option<_>>()?;
+    Some(split_components(
+        arcs, &label, parent, positions, normals, indices, &on_face,
+    ))
+}
+
+/// The meshes of the components: each contour's vertices in id order, its
+/// triangles in sweep order. The largest is compacted in place in the
+/// sweep's arrays (whose memory it then keeps), the others copied out.
+fn split_components(
+    arcs: Vec<ArcId>,
+    label: &[u32],
+    mut local: Vec<u32>,
+    mut positions: Vec<[f32; 3]>,
+    mut normals: Vec<[f32; 3]>,
+    mut indices: Vec<u32>,
+    on_face: &[bool],
+) -> Vec<ContourMesh> {
+    let mut count = vec![0u32; arcs.len()];
+    for &c in label {
+        count[c as usize] += 1;
+    }
+    let largest = (0..arcs.len()).max_by_key(|&c| count[c]).unwrap_or(0) as u32;
+    let mut out: Vec<ContourMesh> = arcs.iter().map(|&a| ContourMesh::empty(a)).collect();
+    let mut kept = 0;
+    for i in 0..label.len() {
+        let c = label[i];
+        out[c as usize].touches_boundary |= on_face[i];
+        if c == largest {
+            positions[kept] = positions[i];
+            normals[kept] = normals[i];
+            local[i] = kept as u32;
+            kept += 1;
+        } else {
+            let m = &mut out[c as usize];
+            local[i] = m.positions.len() as u32;
+            m.positions.push(positions[i]);
+            m.normals.push(normals[i]);
+        }
+    }
+    positions.truncate(kept);
+    normals.truncate(kept);
+    let mut kept = 0;
+    for t in 0..indices.len() / 3 {
+        let tri = [0, 1, 2].map(|k| indices[3 * t + k]);
+        let c = label[tri[0] as usize];
+        let tri = tri.map(|v| local[v as usize]);
+        if c == largest {
+            indices[3 * kept..3 * kept + 3].copy_from_slice(&tri);
+            kept += 1;
+        } else {
+            out[c as usize].indices.extend_from_slice(&tri);
+        }
+    }
+    indices.truncate(3 * kept);
+    if let Some(m) = out.get_mut(largest as usize) {
+        m.positions = positions;
+        m.normals = normals;
+        m.indices = indices;
+    }
+    out.sort_unstable_by_key(|m| m.arc);
+    out
+}
+
+/// The id of the contour vertex on the crossed edge from `lo` to `hi` (its
+/// lower and upper end), from its row's count; `None` when the edge is not
+/// a crossed mesh edge.
+fn edge_id(field: &ScalarField, ctx: &Sweep, lo: u32, hi: u32) -> Option<u32> {
+    let [nx, ny, _] = ctx.dims;
+    let [x, y, z] = field.coords(lo);
+    let [ux, uy, uz] = field.coords(hi);
+    let step = [ux.checked_sub(x)?, uy.checked_sub(y)?, uz.checked_sub(z)?];
+    if step.iter().any(|&s| s > 1) {
+        return None;
+    }
+    let d = step[0] | step[1] << 1 | step[2] << 2;
+    let row = nx * (y + ny * z);
+    let crossed_here = crossed(ctx.cubes[lo as usize]);
+    if d == 0 || crossed_here >> d & 1 == 0 {
+        return None;
+    }
+    let before: u32 = ctx.cubes[row..lo as usize]
+        .iter()
+        .map(|&m| crossed(m).count_ones())
+        .sum();
+    let below_d = (crossed_here & ((1u8 << d) - 1)).count_ones();
+    Some(ctx.row_base[y + ny * z] + before + below_d)
+}
+
+/// The cube masks of the vertices of plane `z` (see [`Sweep::cubes`]).
+fn cube_masks(above: &[u8], dims: [usize; 3], z: usize, out: &mut [u8]) {
+    let [nx, ny, nz] = dims;
+    let plane = nx * ny;
+    for y in 0..ny {
+        for x in 0..nx {
+            let v = x + nx * (y + ny * z);
+            let inside = [x + 1 < nx, y + 1 < ny, z + 1 < nz];
+            let mut m = 0u8;
+            for c in 0..8 {
+                let corner = if (c & 1 == 0 || inside[0])
+                    && (c & 2 == 0 || inside[1])
+                    && (c & 4 == 0 || inside[2])
+                {
+                    v + (c & 1) + nx * (c >> 1 & 1) + plane * (c >> 2 & 1)
+                } else {
+                    v
+                };
+                m |= above[corner] << c;
+            }
+            out[x + nx * y] = m;
+        }
+    }
+}
+
+/// Fills the contour vertices owned by plane `z`, in order of lower end
+/// then offset: position, downhill gradient (zero where it vanishes) and
+/// whether the edge lies in a face of the box (then the contour through it
+/// is cut open there: the follower meets a crossed boundary face exactly
+/// when its contour has such a vertex).
+#[allow(clippy::too_many_arguments)]
+fn crossed_edges<T: Scalar>(
+    values: &[T],
+    field: &ScalarField,
+    cubes: &[u8],
+    iso: Isovalue,
+    z: usize,
+    positions: &mut [[f32; 3]],
+    downhill_out: &mut [[f32; 3]],
+    on_face: &mut [bool],
+) {
+    let dims = field.dims();
+    let [nx, ny, _] = dims;
+    let spacing = field.spacing();
+    let mut i = 0;
+    for y in 0..ny {
+        for x in 0..nx {
+            let v = x + nx * (y + ny * z);
+            let cube = cubes[v];
+            let mut todo = crossed(cube);
+            while todo != 0 {
+                let d = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                let step = [d & 1, d >> 1 & 1, d >> 2 & 1];
+                let (cv, cu) = ([x, y, z], [x + step[0], y + step[1], z + step[2]]);
+                let u = v + step[0] + nx * step[1] + nx * ny * step[2];
+                let ((b, cb), (a, ca)) = if cube & 1 == 1 {
+                    ((u, cu), (v, cv))
+                } else {
+                    ((v, cv), (u, cu))
+                };
+                let (fb, fa) = (values[b].to_f64(), values[a].to_f64());
+                // As the follower: fa > fb, or equal values with ids
+                // ordered (the midpoint then, the order's perturbation).
+                let s = if fa != fb {
+                    ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
+                positions[i] = std::array::from_fn(|k| {
+                    let (pb, pa) = (cb[k] as f64, ca[k] as f64);
+                    ((pb + s * (pa - pb)) * spacing[k]) as f32
+                });
+                downhill_out[i] =
+                    downhill(values, dims, spacing, (b, cb), (a, ca), s).unwrap_or([0.0; 3]);
+                on_face[i] = (0..3).any(|k| step[k] == 0 && (cv[k] == 0 || cv[k] + 1 == dims[k]));
+                i += 1;
+            }
+        }
+    }
+    debug_assert_eq!(i, positions.len());
+}
+
+impl Sweep<'_> {
+    /// Marches the cube layers `layers` into `out` (their triangles, laid
+    /// out by `layer_start`, offset to the first layer's), as global
+    /// vertex ids; returns the number of indices written.
+    fn march_slab(
+        &self,
+        layers: std::ops::Range<usize>,
+        out: &mut [u32],
+        layer_start: &[u32],
+    ) -> usize {
+        let [nx, ny, _] = self.dims;
+        let plane = nx * ny;
+        let tables = SweepTables::get();
+        let mut lower = vec![0u32; plane * 8];
+        let mut upper = vec![0u32; plane * 8];
+        self.fill_ids(&mut upper, layers.start);
+        let offset = layer_start[layers.start] as usize;
+        let mut w = 0;
+        for z in layers {
+            debug_assert_eq!(w + offset, layer_start[z] as usize);
+            std::mem::swap(&mut lower, &mut upper);
+            self.fill_ids(&mut upper, z + 1);
+            for y in 0..ny - 1 {
+                for x in 0..nx - 1 {
+                    let cube = self.cubes[x + nx * (y + ny * z)] as usize;
+                    if cube == 0 || cube == 0xff {
+                        continue;
+                    }
+                    let xy = x + nx * y;
+                    for p in 0..6 {
+                        let mask = tables.tet_mask[p][cube] as usize;
+                        let (pieces, count) = &tables.pieces[p][mask];
+                        for piece in &pieces[..*count as usize] {
+                            for &(c, d) in piece {
+                                let c = c as usize;
+                                let at = (xy + (c & 1) + nx * (c >> 1 & 1)) * 8 + d as usize;
+                                let ids = if c & 4 == 0 { &lower } else { &upper };
+                                out[w] = ids[at];
+                                w += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        w
+    }
+
+    /// Writes the id of every contour vertex owned by plane `z` into
+    /// `ids[(vertex in plane) * 8 + offset]`.
+    fn fill_ids(&self, ids: &mut [u32], z: usize) {
+        let [nx, ny, _] = self.dims;
+        let plane = nx * ny;
+        let mut id = self.row_base[z * ny];
+        for (i, &cube) in self.cubes[plane * z..][..plane].iter().enumerate() {
+            let mut todo = crossed(cube);
+            while todo != 0 {
+                let d = todo.trailing_zeros() as usize;
+                todo &= todo - 1;
+                ids[i * 8 + d] = id;
+                id += 1;
+            }
+        }
+    }
+}
+
+/// Joins the triangle's vertices in the union-find over `parent` (which
+/// holds the ids from `first` on; the larger root goes under the smaller)
+/// and adds its area-weighted normal to theirs.
+#[inline]
+fn add_triangle(
+    parent: &mut [u32],
+    normals: &mut [[f32; 3]],
+    positions: &[[f32; 3]],
+    first: u32,
+    tri: &[u32],
+) {
+    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    for &i in tri {
+        let s = &mut normals[(i - first) as usize];
+        s[0] += n[0];
+        s[1] += n[1];
+        s[2] += n[2];
+    }
+    let mut r0 = find(parent, first, tri[0]);
+    for &i in &tri[1..] {
+        let r = find(parent, first, i);
+        if r != r0 {
+            let (lo, hi) = (r.min(r0), r.max(r0));
+            parent[(hi - first) as usize] = lo;
+            r0 = lo;
+        }
+    }
+}
+
+/// The root of `x`, halving the path (`parent` holds ids from `first` on).
+#[inline]
+fn find(parent: &mut [u32], first: u32, mut x: u32) -> u32 {
+    loop {
+        let p = parent[(x - first) as usize];
+        if p == x {
+            return x;
+        }
+        let g = parent[(p - first) as usize];
+        parent[(x - first) as usize] = g;
+        x = g;
+    }
+}
