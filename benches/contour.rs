@@ -1,9 +1,10 @@
 //! Criterion benches of contour extraction, what a user feels when
 //! dragging an isovalue: microseconds to a path seed, triangles per second
 //! to follow one contour (single-threaded), seconds to the whole
-//! isosurface at one value (every contour, in parallel). Run on the two
-//! MRI templates of the shared data folder, on the largest contour among a
-//! few isovalues, or on a synthetic cube without them.
+//! isosurface at one value (every contour: one parallel sweep; following
+//! every seed for comparison). Run on the two MRI templates of the shared
+//! data folder, on the largest contour among a few isovalues, or on a
+//! synthetic cube without them.
 //!
 //! `cargo bench --bench contour` (set `FLEXISO_BENCH_VOLUMES=colin27_ch2`
 //! to bench only some of them). Before criterion's statistics it prints
@@ -15,7 +16,8 @@
 
 use criterion::{Criterion, Throughput, criterion_group};
 use flexiso::contour::{
-    ContourFollower, Isovalue, PathSeed, PathSeeds, all_contours, global::spanning_arcs,
+    ContourFollower, Isovalue, PathSeed, PathSeeds, all_contours, all_contours_by_following,
+    global::spanning_arcs,
 };
 use flexiso::field::ScalarField;
 use flexiso::field::io::{ReadOptions, read_volume};
@@ -144,10 +146,13 @@ fn quick() {
         let t_all = best_of(7, || {
             black_box(all_contours(&tree, &field, iso));
         });
+        let t_followed = best_of(3, || {
+            black_box(all_contours_by_following(&tree, &field, iso));
+        });
         println!(
             "{name} h = {}: seed {:.2} us; largest contour {triangles} triangles in {:.3} s \
              ({:.2} M triangles/s, one thread; on the CPU {:.3} s, {:.2} M/s); \
-             all {} contours in {:.3} s ({} threads)",
+             all {} contours in {:.3} s ({} threads; {:.3} s following each seed)",
             iso.value,
             t_seed * 1e6,
             t_follow,
@@ -156,7 +161,8 @@ fn quick() {
             triangles as f64 / cpu / 1e6,
             spanning.len(),
             t_all,
-            rayon::current_num_threads()
+            rayon::current_num_threads(),
+            t_followed
         );
     }
 }

@@ -1,7 +1,9 @@
 //! Every contour at one isovalue: the classic isosurface as the union of
-//! the contours of the superarcs spanning it, one mesh per superarc,
-//! extracted in parallel; and a plain marching-tetrahedra pass over the
-//! whole volume, kept as the independent oracle of the tests.
+//! the contours of the superarcs spanning it, one mesh per superarc. The
+//! explorer's path is one parallel sweep over the volume (see
+//! `super::sweep`); following every seed in parallel and a plain
+//! marching-tetrahedra pass over the whole volume are the independent
+//! oracles of the tests.
 
 use super::follow::{ContourFollower, IdBuildHasher, TetTables};
 use super::seed::{PathSeed, PathSeeds, arc_spans};

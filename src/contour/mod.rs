@@ -10,9 +10,10 @@
 //!   the isovalue crosses, emitting marching-tetrahedra triangles; cost
 //!   proportional to the contour, never to the volume.
 //! * [`global`]: every contour at one isovalue (the classic isosurface, one
-//!   mesh per superarc, in parallel, one follower per worker thread) and a
-//!   plain marching-tetrahedra pass over the whole volume, the oracle of
-//!   the tests.
+//!   mesh per superarc) by one parallel sweep over the volume whose
+//!   components the arcs' path seeds name (`sweep`); following every seed
+//!   instead, and a plain marching-tetrahedra pass over the whole volume,
+//!   are kept as the tests' oracles.
 //! * [`topology`]: vertices, edges, Euler characteristic, boundary,
 //!   orientation, area and volume of an extracted mesh.
 //! * [`export`]: binary PLY, OBJ and binary STL.
