@@ -18,7 +18,7 @@ cd "$(dirname "$0")/.."
 OUT="${1:-out}"
 INPUT="${FLEXISO_INPUT:-synthetic:96}"
 mkdir -p "$OUT"
-BIN=target/release/flexiso
+BIN="${CARGO_TARGET_DIR:-target}/release/flexiso"
 if [ ! -x "$BIN" ] || [ -n "$(find src -newer "$BIN" -name '*.rs' | head -1)" ]; then
   cargo build --release
 fi

@@ -62,6 +62,9 @@ pick it.
 Keys: Ctrl+O opens, Delete removes the active contour, Escape clears. \
 Drop a volume file on the window to open it.";
 
+/// How often the window redraws on its own while a job runs.
+const PROGRESS_REPAINT: Duration = Duration::from_millis(200);
+
 /// How many arcs the tree shows when a dataset opens.
 pub const DEFAULT_ARCS: usize = 100;
 
@@ -417,6 +420,7 @@ impl FlexisoApp {
         let _ = std::thread::Builder::new()
             .name("flexiso-betti".into())
             .spawn(move || {
+                pipeline::yield_to_ui();
                 let topo = Arc::new(ContourTopology::new(&tree, &field));
                 let _ = tx.send((key, topo));
                 if let Some(n) = notify {
@@ -625,6 +629,7 @@ impl FlexisoApp {
         let _ = std::thread::Builder::new()
             .name("flexiso-isosurface".into())
             .spawn(move || {
+                pipeline::yield_to_ui();
                 let t = Instant::now();
                 let meshes: Vec<Arc<ContourMesh>> = all_contours(&tree, &field, Isovalue::new(h))
                     .into_iter()
@@ -1102,8 +1107,11 @@ impl eframe::App for FlexisoApp {
             ui.ctx().request_repaint();
         }
         if self.pipeline.running().is_some() {
-            // Animate the progress bar.
-            ui.ctx().request_repaint_after(Duration::from_millis(50));
+            // Animate the progress bar, at a rate that leaves the cores to
+            // the job: without a GPU every frame is rasterised on the CPU.
+            // Input still repaints at once (and the UI thread outranks the
+            // job's threads, see pipeline::yield_to_ui).
+            ui.ctx().request_repaint_after(PROGRESS_REPAINT);
         }
         self.ui_ms = t0.elapsed().as_secs_f64() * 1e3;
         if let Some(log) = &mut self.frame_log {

@@ -249,6 +249,7 @@ impl Pipeline {
         let spawned = std::thread::Builder::new()
             .name(format!("flexiso-job-{job}"))
             .spawn(move || {
+                yield_to_ui();
                 let result = run(request, measure, &p);
                 // The receiver is gone only when the app has closed.
                 let _ = tx.send((job, result));
@@ -313,5 +314,20 @@ impl Pipeline {
             }
         }
         None
+    }
+}
+
+/// Lowers the calling thread's scheduling priority (nice 10, Linux), so
+/// that the UI thread, which only draws, gets a core whenever it wants one
+/// while the engine's threads fill the rest: the window keeps drawing at
+/// full rate on a machine with as few cores as the engine has threads.
+/// Called first thing on every background thread of the explorer (jobs,
+/// extractions, the engine's rayon workers).
+pub fn yield_to_ui() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: setpriority only reads its integer arguments; `who = 0` on
+    // Linux names the calling thread (nice is per thread there).
+    unsafe {
+        libc::setpriority(libc::PRIO_PROCESS, 0, 10);
     }
 }

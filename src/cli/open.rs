@@ -51,6 +51,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         renderer: eframe::Renderer::Wgpu,
         ..Default::default()
     };
+    // The engine's rayon workers run below the UI thread's priority (see
+    // yield_to_ui); a pool already built (never, from main) stays as it is.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .start_handler(|_| crate::app::pipeline::yield_to_ui())
+        .build_global();
     let frame_log = args.frame_log.clone();
     let ui_dump = args.ui_dump.clone();
     let input = args.input;
