@@ -164,7 +164,89 @@ fn quick() {
             rayon::current_num_threads(),
             t_followed
         );
+        drag_latency(&name, &tree, &field);
     }
+}
+
+/// What dragging a contour's isovalue costs before the new mesh can be
+/// drawn: a contour of about 200k triangles (the largest spanning arc at
+/// the first isovalue, from the top, that has one of 150k to 250k) moved by
+/// steps down its arc: path seed, following, and the upload to the GPU
+/// (headless wgpu, software Vulkan here), then one 1280×800 render.
+fn drag_latency(name: &str, tree: &ContourTree, field: &ScalarField) {
+    let (lo, hi) = field.range();
+    let seeds = PathSeeds::new();
+    let mut follower = ContourFollower::new(field);
+    let mut found = None;
+    'search: for k in (1..64).rev() {
+        let iso = Isovalue::new((lo + (hi - lo) * k as f64 / 64.0).round());
+        for arc in spanning_arcs(tree, field, iso) {
+            let Some(seed) = seeds.seed(tree, field, arc, iso) else {
+                continue;
+            };
+            let n = follower.follow(&seed, iso).num_triangles();
+            if (150_000..=250_000).contains(&n) {
+                found = Some((arc, iso.value));
+                break 'search;
+            }
+        }
+    }
+    let Some((arc, h)) = found else {
+        println!("{name}: no contour of 150k-250k triangles at the isovalues tried");
+        return;
+    };
+    let gpu = flexiso::render::headless::Gpu::new().ok();
+    let mut renderer = gpu.as_ref().map(|g| g.renderer());
+    let mut worst = (0f64, 0f64, 0f64, 0usize);
+    // Five drag steps down the arc, towards its lower end.
+    let bottom = field.value(tree.node(tree.arc(arc).lower).vertex);
+    for step in 0..5 {
+        let iso = Isovalue::new(h - (h - bottom) * step as f64 / 6.0);
+        let t = Instant::now();
+        let Some(seed) = seeds.seed(tree, field, arc, iso) else {
+            break;
+        };
+        let mesh = follower.follow(&seed, iso);
+        let extract = t.elapsed().as_secs_f64() * 1e3;
+        let (mut upload, mut render) = (0.0, 0.0);
+        if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
+            let t = Instant::now();
+            r.set_mesh(
+                &g.device,
+                &g.queue,
+                1,
+                &mesh.positions,
+                &mesh.normals,
+                &mesh.indices,
+            )
+            .expect("upload");
+            let _ = g.device.poll(wgpu::PollType::wait_indefinitely());
+            upload = t.elapsed().as_secs_f64() * 1e3;
+            let mut camera = flexiso::render::Camera::default();
+            if let Some((a, b)) = r.visible_bounds() {
+                camera.fit(a, b);
+            }
+            let t = Instant::now();
+            r.render(&g.device, &g.queue, &camera, 1280, 800);
+            let _ = g.device.poll(wgpu::PollType::wait_indefinitely());
+            render = t.elapsed().as_secs_f64() * 1e3;
+        }
+        if extract + upload > worst.0 + worst.1 {
+            worst = (extract, upload, render, mesh.num_triangles());
+        }
+    }
+    println!(
+        "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
+         worst step extraction {:.1} ms + upload {:.1} ms = {:.1} ms; its render {:.1} ms ({})",
+        worst.3,
+        arc,
+        worst.0,
+        worst.1,
+        worst.0 + worst.1,
+        worst.2,
+        gpu.as_ref()
+            .map_or("no GPU adapter".into(), |g| g.describe())
+    );
 }
 
 criterion_group!(benches, contour);

@@ -981,6 +981,17 @@ impl FlexisoApp {
                                     ui.label("extracting…");
                                 });
                             }
+                            None if c.mesh.is_some() => {
+                                let n = c.mesh.as_ref().map_or(0, |m| m.num_triangles());
+                                ui.label(format!("{n} triangles"));
+                                ui.horizontal(|ui| {
+                                    ui.spinner();
+                                    ui.label(format!(
+                                        "measuring… (extracted in {:.1} ms)",
+                                        c.extract_ms
+                                    ));
+                                });
+                            }
                             None => {
                                 ui.label("no contour at this value");
                             }

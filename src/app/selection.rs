@@ -67,6 +67,11 @@ impl Contour {
     pub fn extracting(&self) -> bool {
         self.done < self.requested
     }
+
+    /// True while the mesh shown waits for its measurements.
+    pub fn measuring(&self) -> bool {
+        self.mesh.is_some() && self.topology.is_none()
+    }
 }
 
 /// A contour to extract on the worker.
@@ -79,19 +84,29 @@ struct Job {
     tree: Arc<ContourTree>,
 }
 
-/// A worker's answer.
-struct Done {
-    id: u64,
-    request: u64,
-    mesh: Option<ContourMesh>,
-    topology: Option<MeshTopology>,
-    ms: f64,
+/// A worker's answer: first the mesh, then (unless a newer request for
+/// the contour came first) its measurements.
+enum Done {
+    Mesh {
+        id: u64,
+        request: u64,
+        mesh: Option<Arc<ContourMesh>>,
+        ms: f64,
+    },
+    Topology {
+        id: u64,
+        request: u64,
+        topology: MeshTopology,
+    },
 }
 
 /// Extracts contours on a worker thread, newest request per contour only:
 /// while an isovalue is dragged, requests that a newer one has replaced
 /// are skipped, so a contour of millions of triangles lags behind the
-/// pointer instead of freezing the window.
+/// pointer instead of freezing the window. A mesh is sent as soon as it
+/// is extracted; its measurements (topology, area, volume: several times
+/// the extraction's cost) follow when no newer request is waiting, so
+/// dragging shows new meshes at extraction speed.
 pub struct Extractor {
     tx: Sender<Job>,
     rx: Receiver<Done>,
@@ -112,30 +127,61 @@ impl Extractor {
         let _ = std::thread::Builder::new()
             .name("flexiso-extract".into())
             .spawn(move || {
-                while let Ok(first) = jobs.recv() {
-                    // Keep only the newest request of each contour.
-                    let mut latest: HashMap<u64, Job> = HashMap::new();
-                    latest.insert(first.id, first);
+                let send = |d: Done| {
+                    let ok = done_tx.send(d).is_ok();
+                    if let Some(n) = &notify {
+                        n();
+                    }
+                    ok
+                };
+                // Newest request per contour, and meshes still to measure.
+                let mut latest: HashMap<u64, Job> = HashMap::new();
+                let mut to_measure: Vec<(u64, u64, Arc<ContourMesh>)> = Vec::new();
+                loop {
+                    if latest.is_empty() && to_measure.is_empty() {
+                        match jobs.recv() {
+                            Ok(j) => {
+                                latest.insert(j.id, j);
+                            }
+                            Err(_) => return,
+                        }
+                    }
                     while let Ok(j) = jobs.try_recv() {
                         latest.insert(j.id, j);
                     }
-                    let mut batch: Vec<Job> = latest.into_values().collect();
-                    batch.sort_by_key(|j| j.id);
-                    for j in batch {
-                        let t = std::time::Instant::now();
-                        let (mesh, topology) = extract_mesh(&j.field, &j.tree, j.superarc, j.h);
-                        let done = Done {
-                            id: j.id,
-                            request: j.request,
-                            mesh,
-                            topology,
-                            ms: t.elapsed().as_secs_f64() * 1e3,
-                        };
-                        if done_tx.send(done).is_err() {
-                            return;
+                    if !latest.is_empty() {
+                        to_measure.retain(|(id, _, _)| !latest.contains_key(id));
+                        let mut batch: Vec<Job> = latest.drain().map(|(_, j)| j).collect();
+                        batch.sort_by_key(|j| j.id);
+                        for j in batch {
+                            let t = std::time::Instant::now();
+                            let mesh =
+                                extract_mesh(&j.field, &j.tree, j.superarc, j.h).map(Arc::new);
+                            let ms = t.elapsed().as_secs_f64() * 1e3;
+                            if let Some(m) = &mesh {
+                                to_measure.push((j.id, j.request, Arc::clone(m)));
+                            }
+                            let done = Done::Mesh {
+                                id: j.id,
+                                request: j.request,
+                                mesh,
+                                ms,
+                            };
+                            if !send(done) {
+                                return;
+                            }
                         }
-                        if let Some(n) = &notify {
-                            n();
+                        // New requests first: they may make these stale.
+                        continue;
+                    }
+                    if let Some((id, request, mesh)) = to_measure.pop() {
+                        let topology = MeshTopology::of(&mesh.positions, &mesh.indices);
+                        if !send(Done::Topology {
+                            id,
+                            request,
+                            topology,
+                        }) {
+                            return;
                         }
                     }
                 }
@@ -177,12 +223,17 @@ impl Selection {
         any
     }
 
-    /// Blocks until every requested extraction is installed (tests).
+    /// Blocks until every requested extraction is installed and measured
+    /// (tests).
     pub fn wait_for_extractions(&mut self) {
         let Some(e) = self.extractor.clone() else {
             return;
         };
-        while self.contours.iter().any(Contour::extracting) {
+        while self
+            .contours
+            .iter()
+            .any(|c| c.extracting() || c.measuring())
+        {
             match e.rx.recv_timeout(std::time::Duration::from_secs(60)) {
                 Ok(d) => {
                     self.install(d);
@@ -198,19 +249,40 @@ impl Selection {
     }
 
     fn install(&mut self, d: Done) -> bool {
-        let Some(c) = self.get_mut(d.id) else {
-            return false;
-        };
-        // An older answer than one installed: drop it.
-        if d.request <= c.done {
-            return false;
+        match d {
+            Done::Mesh {
+                id,
+                request,
+                mesh,
+                ms,
+            } => {
+                let Some(c) = self.get_mut(id) else {
+                    return false;
+                };
+                // An older answer than one installed: drop it.
+                if request <= c.done {
+                    return false;
+                }
+                c.done = request;
+                c.mesh = mesh;
+                c.topology = None;
+                c.version += 1;
+                c.extract_ms = ms;
+                true
+            }
+            Done::Topology {
+                id,
+                request,
+                topology,
+            } => match self.get_mut(id) {
+                // Only the measurements of the mesh shown.
+                Some(c) if c.done == request => {
+                    c.topology = Some(topology);
+                    true
+                }
+                _ => false,
+            },
         }
-        c.done = d.request;
-        c.mesh = d.mesh.map(Arc::new);
-        c.topology = d.topology;
-        c.version += 1;
-        c.extract_ms = d.ms;
-        true
     }
 
     /// Extracts `c` (at once, or by the worker).
@@ -386,30 +458,95 @@ impl Selection {
     }
 }
 
-/// The contour of `superarc` at `h` and its measurements (None when the
-/// superarc does not span h).
+/// The contour of `superarc` at `h` (None when the superarc does not span
+/// h).
 fn extract_mesh(
     field: &ScalarField,
     tree: &ContourTree,
     superarc: ArcId,
     h: f64,
-) -> (Option<ContourMesh>, Option<MeshTopology>) {
+) -> Option<ContourMesh> {
     let iso = Isovalue::new(h);
-    let mesh = path_seed(tree, field, superarc, iso)
-        .map(|seed| ContourFollower::new(field).follow(&seed, iso));
-    let topology = mesh
-        .as_ref()
-        .map(|m| MeshTopology::of(&m.positions, &m.indices));
-    (mesh, topology)
+    path_seed(tree, field, superarc, iso).map(|seed| ContourFollower::new(field).follow(&seed, iso))
 }
 
 /// Extracts the contour of `c.superarc` at `c.h` into `c`, at once.
 pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
     let t = std::time::Instant::now();
-    let (mesh, topology) = extract_mesh(field, tree, c.superarc, c.h);
-    c.topology = topology;
+    let mesh = extract_mesh(field, tree, c.superarc, c.h);
+    c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
+    c.topology = mesh
+        .as_ref()
+        .map(|m| MeshTopology::of(&m.positions, &m.indices));
     c.mesh = mesh.map(Arc::new);
     c.version += 1;
     c.done = c.requested;
-    c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::synthetic::Synthetic;
+    use crate::progress::Progress;
+
+    fn dataset() -> (Arc<ScalarField>, Arc<ContourTree>, ArcId, f64) {
+        let field = Arc::new(Synthetic::cube(24).generate());
+        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+        // The longest-lived arc, at its middle.
+        let (arc, h) = (0..tree.arcs().len() as u32)
+            .map(|a| {
+                let e = tree.arc(ArcId(a));
+                let (lo, hi) = (
+                    field.value(tree.node(e.lower).vertex),
+                    field.value(tree.node(e.upper).vertex),
+                );
+                (ArcId(a), lo, hi)
+            })
+            .max_by(|x, y| (x.2 - x.1).total_cmp(&(y.2 - y.1)))
+            .map(|(a, lo, hi)| (a, 0.5 * (lo + hi)))
+            .expect("arcs");
+        (field, Arc::new(tree), arc, h)
+    }
+
+    #[test]
+    fn the_worker_sends_the_mesh_then_its_measurements() {
+        let (field, tree, arc, h) = dataset();
+        let mut s = Selection::default();
+        s.set_extractor(Extractor::new(None));
+        let id = s.add(&field, &tree, arc, h, true);
+        s.wait_for_extractions();
+        let c = s.get(id).expect("selected");
+        let mesh = c.mesh.as_ref().expect("a mesh");
+        assert!(mesh.num_triangles() > 0);
+        assert_eq!(
+            c.topology.as_ref(),
+            Some(&MeshTopology::of(&mesh.positions, &mesh.indices)),
+            "the measurements of the mesh shown"
+        );
+    }
+
+    #[test]
+    fn measurements_of_an_older_mesh_are_dropped() {
+        let (field, tree, arc, h) = dataset();
+        let mut s = Selection::default();
+        let id = s.add(&field, &tree, arc, h, true);
+        let before = s.get(id).and_then(|c| c.topology.clone());
+        assert!(before.is_some(), "extracted and measured at once");
+        let stale = Done::Topology {
+            id,
+            request: 0,
+            topology: MeshTopology::default(),
+        };
+        assert!(!s.install(stale));
+        assert_eq!(s.get(id).and_then(|c| c.topology.clone()), before);
+        // A newer mesh clears the measurements until its own arrive.
+        let newer = Done::Mesh {
+            id,
+            request: 2,
+            mesh: s.get(id).and_then(|c| c.mesh.clone()),
+            ms: 1.0,
+        };
+        assert!(s.install(newer));
+        assert!(s.get(id).is_some_and(Contour::measuring));
+    }
 }
