@@ -3,8 +3,9 @@
 //! marching-tetrahedra pass over the whole volume.
 
 use flexiso::contour::{
-    ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeeds, all_contours,
-    all_contours_by_following, marching_tetrahedra, path_seed, path_seed_in_chain,
+    ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed, PathSeeds, all_contours,
+    all_contours_by_following, contours_through, marching_tetrahedra, path_seed,
+    path_seed_in_chain,
 };
 use flexiso::field::{ScalarField, Values};
 use flexiso::measure::betti::ContourTopology;
@@ -56,6 +57,18 @@ fn check_all(
             "arc {:?}: closedness",
             c.arc
         );
+    }
+    // Seeds in any order get their own contours back, in their order.
+    let seeds = PathSeeds::new();
+    let reversed: Vec<PathSeed> = contours
+        .iter()
+        .rev()
+        .filter_map(|c| seeds.seed(tree, field, c.arc, iso))
+        .collect();
+    let through = contours_through(tree, field, &reversed, iso);
+    assert_eq!(through.len(), contours.len());
+    for (t, c) in through.iter().zip(contours.iter().rev()) {
+        assert_eq!((t.arc, t.num_triangles()), (c.arc, c.num_triangles()));
     }
     // The parallel sweep and following every seed give the same contours.
     let followed = all_contours_by_following(tree, field, iso);

@@ -173,7 +173,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let meshes = match seeds.as_slice() {
         [seed] => vec![ContourFollower::new(field).follow(seed, iso)],
-        _ => contour::follow_all(field, &seeds, iso),
+        _ => contour::contours_through(&tree, field, &seeds, iso),
     };
     let extract = t.elapsed().as_secs_f64();
     let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();

@@ -25,23 +25,51 @@ pub fn spanning_arcs(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> 
 }
 
 /// Every contour at `iso`, one mesh per spanning superarc, sorted by arc
-/// id: one parallel sweep over the volume whose components are named by
-/// the arcs' path seeds (see [`super::sweep`]). Where that cannot name
-/// them one to one (it never should), the contours are followed from
-/// their seeds instead ([`follow_all`]).
+/// id (see [`contours_through`]).
 pub fn all_contours(tree: &ContourTree, field: &ScalarField, iso: Isovalue) -> Vec<ContourMesh> {
     let path_seeds = PathSeeds::new();
     let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
         .into_iter()
         .filter_map(|arc| path_seeds.seed(tree, field, arc, iso))
         .collect();
-    super::sweep::all_contours_by_sweep(field, &seeds, iso).unwrap_or_else(|| {
-        debug_assert!(
-            field.dims().iter().any(|&d| d < 2),
-            "contours at {iso:?} do not match the tree's spanning arcs"
-        );
-        follow_all(field, &seeds, iso)
-    })
+    contours_through(tree, field, &seeds, iso)
+}
+
+/// The contours through `seeds` at `iso`, in the seeds' order. When the
+/// seeds name every contour at `iso` (one per spanning superarc), by one
+/// parallel sweep over the volume whose components the seeds name (see
+/// `super::sweep`); otherwise, or should the sweep's components and the
+/// seeds ever not match one to one, by following each seed
+/// ([`follow_all`]).
+pub fn contours_through(
+    tree: &ContourTree,
+    field: &ScalarField,
+    seeds: &[PathSeed],
+    iso: Isovalue,
+) -> Vec<ContourMesh> {
+    if seeds.len() > 1 && seeds.len() == spanning_arcs(tree, field, iso).len() {
+        match super::sweep::all_contours_by_sweep(field, seeds, iso) {
+            Some(by_arc) => {
+                // By arc id; back to the seeds' order.
+                let mut slot: Vec<Option<ContourMesh>> = by_arc.into_iter().map(Some).collect();
+                let mut arcs: Vec<(ArcId, usize)> =
+                    seeds.iter().enumerate().map(|(i, s)| (s.arc, i)).collect();
+                arcs.sort_unstable();
+                let mut out: Vec<Option<ContourMesh>> = vec![None; seeds.len()];
+                for (k, &(_, i)) in arcs.iter().enumerate() {
+                    out[i] = slot[k].take();
+                }
+                if let Some(out) = out.into_iter().collect::<Option<Vec<_>>>() {
+                    return out;
+                }
+            }
+            None => debug_assert!(
+                field.dims().iter().any(|&d| d < 2),
+                "contours at {iso:?} do not match the tree's spanning arcs"
+            ),
+        }
+    }
+    follow_all(field, seeds, iso)
 }
 
 /// [`all_contours`] by following every contour from its path seed, in

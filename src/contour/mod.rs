@@ -49,7 +49,9 @@ mod sweep;
 pub mod topology;
 
 pub use follow::ContourFollower;
-pub use global::{all_contours, all_contours_by_following, follow_all, marching_tetrahedra};
+pub use global::{
+    all_contours, all_contours_by_following, contours_through, follow_all, marching_tetrahedra,
+};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;
 
