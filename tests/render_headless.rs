@@ -345,3 +345,52 @@ fn torus_hides_its_far_side_and_shell_shows_its_core() {
     assert_eq!(id, 1);
     assert!((Vec3::from(pos) - eye).length() <= (ring_near - eye).length() + 0.05);
 }
+
+/// A mesh bigger than the per-call budget goes to the GPU over several
+/// calls: meanwhile the old geometry is drawn (and picked), then the new
+/// one, pixel for pixel as if uploaded at once.
+#[test]
+fn budgeted_upload_swaps_in_the_complete_mesh() {
+    let Some(gpu) = gpu() else { return };
+    let (small_p, small_n, small_i) = icosphere([0.25, 0.5, 0.5], 0.1, 1);
+    let (big_p, big_n, big_i) = icosphere([0.7, 0.5, 0.5], 0.2, 5);
+    let mut camera = Camera::default();
+    camera.fit([0.0; 3], [1.0; 3]);
+    let (w, h) = (160, 120);
+
+    let mut direct = gpu.renderer();
+    direct
+        .set_mesh(&gpu.device, &gpu.queue, 1, &big_p, &big_n, &big_i)
+        .expect("big sphere");
+    direct.render(&gpu.device, &gpu.queue, &camera, w, h);
+    let expected = direct.read_image(&gpu.device, &gpu.queue).expect("read");
+
+    let mut r = gpu.renderer();
+    r.set_mesh(&gpu.device, &gpu.queue, 1, &small_p, &small_n, &small_i)
+        .expect("small sphere");
+    let big = flexiso::render::PreparedMesh::new(&big_p, &big_n, &big_i).expect("valid");
+    let bytes = big.gpu_bytes();
+    r.set_prepared_mesh(&gpu.device, 1, std::sync::Arc::new(big))
+        .expect("queued");
+    let budget = 10_000;
+    let mut calls = 0;
+    while r.upload_pending(&gpu.device, &gpu.queue, budget) {
+        calls += 1;
+        // Not yet swapped: the small sphere is still what is drawn.
+        let hit = r.pick(&camera, w as f32, h as f32, 0.0, 0.0);
+        assert!(hit.is_none());
+        let bounds = r.visible_bounds().expect("the old mesh");
+        assert!(bounds.1[0] < 0.4, "still the small sphere: {bounds:?}");
+        assert!(calls < 10_000, "the upload never finishes");
+    }
+    assert!(!r.has_pending_uploads());
+    assert_eq!(calls as u64, bytes.div_ceil(budget) - 1, "{bytes} bytes");
+    let bounds = r.visible_bounds().expect("the new mesh");
+    assert!(bounds.1[0] > 0.85, "now the big sphere: {bounds:?}");
+    r.render(&gpu.device, &gpu.queue, &camera, w, h);
+    let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    assert!(
+        img.as_raw() == expected.as_raw(),
+        "same picture as uploaded at once"
+    );
+}

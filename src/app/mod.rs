@@ -28,12 +28,14 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
 use egui::{Color32, Key, Modifiers, RichText};
+use rayon::prelude::*;
 
 use crate::cli::input::InputArgs;
 use crate::contour::{ContourMesh, Isovalue, all_contours};
 use crate::field::ScalarField;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
+use crate::render::PreparedMesh;
 use crate::simplify::{Measure, SimplifiedTree};
 
 use curve_panel::CurvePanel;
@@ -85,14 +87,31 @@ struct AllContours {
     /// The key being computed.
     pending: Option<(u64, usize)>,
     meshes: Vec<Arc<ContourMesh>>,
+    /// The same, ready for the GPU (one per mesh).
+    gpu: Vec<Arc<PreparedMesh>>,
     version: u64,
     millis: f64,
     tx: Sender<IsosurfaceResult>,
     rx: Receiver<IsosurfaceResult>,
 }
 
-/// An extraction of every contour at h: its key, the meshes, milliseconds.
-type IsosurfaceResult = ((u64, usize), Vec<Arc<ContourMesh>>, f64);
+/// An extraction of every contour at h: its key, the meshes (and the same
+/// ready for the GPU), milliseconds.
+type IsosurfaceResult = (
+    (u64, usize),
+    Vec<(Arc<ContourMesh>, Arc<PreparedMesh>)>,
+    f64,
+);
+
+impl AllContours {
+    fn install(&mut self, (key, meshes, millis): IsosurfaceResult) {
+        self.pending = None;
+        self.key = Some(key);
+        (self.meshes, self.gpu) = meshes.into_iter().unzip();
+        self.millis = millis;
+        self.version += 1;
+    }
+}
 
 impl Default for AllContours {
     fn default() -> Self {
@@ -101,6 +120,7 @@ impl Default for AllContours {
             key: None,
             pending: None,
             meshes: Vec::new(),
+            gpu: Vec::new(),
             version: 0,
             millis: 0.0,
             tx,
@@ -603,13 +623,9 @@ impl FlexisoApp {
     }
 
     fn update_all_contours(&mut self, ctx: &egui::Context, pointer_down: bool) {
-        while let Ok((key, meshes, millis)) = self.all.rx.try_recv() {
-            if self.all.pending == Some(key) {
-                self.all.pending = None;
-                self.all.key = Some(key);
-                self.all.meshes = meshes;
-                self.all.millis = millis;
-                self.all.version += 1;
+        while let Ok(result) = self.all.rx.try_recv() {
+            if self.all.pending == Some(result.0) {
+                self.all.install(result);
             }
         }
         let Some(ds) = &self.dataset else { return };
@@ -631,10 +647,11 @@ impl FlexisoApp {
             .spawn(move || {
                 pipeline::yield_to_ui();
                 let t = Instant::now();
-                let meshes: Vec<Arc<ContourMesh>> = all_contours(&tree, &field, Isovalue::new(h))
-                    .into_iter()
+                let meshes: Vec<_> = all_contours(&tree, &field, Isovalue::new(h))
+                    .into_par_iter()
                     .filter(|m| !m.indices.is_empty())
-                    .map(Arc::new)
+                    .filter_map(|m| Some((view3d::prepare(&m)?, m)))
+                    .map(|(gpu, m)| (Arc::new(m), gpu))
                     .collect();
                 let _ = tx.send((key, meshes, t.elapsed().as_secs_f64() * 1e3));
                 ctx.request_repaint();
@@ -646,12 +663,8 @@ impl FlexisoApp {
         if self.all.pending.is_none() {
             return;
         }
-        if let Ok((key, meshes, millis)) = self.all.rx.recv() {
-            self.all.pending = None;
-            self.all.key = Some(key);
-            self.all.meshes = meshes;
-            self.all.millis = millis;
-            self.all.version += 1;
+        if let Ok(result) = self.all.rx.recv() {
+            self.all.install(result);
         }
         self.update_all_contours(ctx, false);
     }
@@ -699,7 +712,7 @@ impl FlexisoApp {
     fn scene(&self) -> Vec<SceneMesh> {
         let mut scene = Vec::new();
         for c in &self.selection.contours {
-            if let Some(m) = &c.mesh {
+            if let Some(m) = &c.gpu {
                 scene.push(SceneMesh {
                     id: c.id,
                     mesh: Arc::clone(m),
@@ -712,7 +725,7 @@ impl FlexisoApp {
         }
         if self.show_all {
             let faded = !self.selection.contours.is_empty();
-            for (i, m) in self.all.meshes.iter().enumerate() {
+            for (i, m) in self.all.gpu.iter().enumerate() {
                 let c = PALETTE[i % PALETTE.len()];
                 scene.push(SceneMesh {
                     id: ALL_CONTOURS_ID + i as u64,

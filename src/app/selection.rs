@@ -14,8 +14,11 @@ use std::sync::mpsc::{Receiver, Sender, channel};
 
 use egui::Color32;
 
+use super::view3d::prepare;
+
 use crate::contour::{ContourFollower, ContourMesh, Isovalue, MeshTopology, path_seed};
 use crate::field::ScalarField;
+use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
 
 /// Distinct colours for contours (sRGB).
@@ -51,6 +54,8 @@ pub struct Contour {
     /// The extracted mesh (None until extracted, or when the superarc
     /// does not span h).
     pub mesh: Option<Arc<ContourMesh>>,
+    /// The same mesh made ready for the GPU (off the UI thread).
+    pub gpu: Option<Arc<PreparedMesh>>,
     /// Its measurements.
     pub topology: Option<MeshTopology>,
     /// Bumped whenever the mesh changes (the 3D view re-uploads).
@@ -91,6 +96,7 @@ enum Done {
         id: u64,
         request: u64,
         mesh: Option<Arc<ContourMesh>>,
+        gpu: Option<Arc<PreparedMesh>>,
         ms: f64,
     },
     Topology {
@@ -158,6 +164,7 @@ impl Extractor {
                             let mesh =
                                 extract_mesh(&j.field, &j.tree, j.superarc, j.h).map(Arc::new);
                             let ms = t.elapsed().as_secs_f64() * 1e3;
+                            let gpu = mesh.as_deref().and_then(prepare);
                             if let Some(m) = &mesh {
                                 to_measure.push((j.id, j.request, Arc::clone(m)));
                             }
@@ -165,6 +172,7 @@ impl Extractor {
                                 id: j.id,
                                 request: j.request,
                                 mesh,
+                                gpu,
                                 ms,
                             };
                             if !send(done) {
@@ -254,6 +262,7 @@ impl Selection {
                 id,
                 request,
                 mesh,
+                gpu,
                 ms,
             } => {
                 let Some(c) = self.get_mut(id) else {
@@ -265,6 +274,7 @@ impl Selection {
                 }
                 c.done = request;
                 c.mesh = mesh;
+                c.gpu = gpu;
                 c.topology = None;
                 c.version += 1;
                 c.extract_ms = ms;
@@ -354,6 +364,7 @@ impl Selection {
             colour,
             visible: true,
             mesh: None,
+            gpu: None,
             topology: None,
             version: 0,
             extract_ms: 0.0,
@@ -478,6 +489,7 @@ pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
     c.topology = mesh
         .as_ref()
         .map(|m| MeshTopology::of(&m.positions, &m.indices));
+    c.gpu = mesh.as_ref().and_then(prepare);
     c.mesh = mesh.map(Arc::new);
     c.version += 1;
     c.done = c.requested;
@@ -544,6 +556,7 @@ mod tests {
             id,
             request: 2,
             mesh: s.get(id).and_then(|c| c.mesh.clone()),
+            gpu: s.get(id).and_then(|c| c.gpu.clone()),
             ms: 1.0,
         };
         assert!(s.install(newer));

@@ -12,14 +12,14 @@ use std::sync::Arc;
 use egui::{Color32, Sense};
 
 use crate::contour::ContourMesh;
-use crate::render::{Camera, EguiTexture, Renderer};
+use crate::render::{Camera, EguiTexture, PreparedMesh, Renderer};
 
 /// One mesh the view should draw.
 pub struct SceneMesh {
     /// Renderer id.
     pub id: u64,
-    /// Geometry (uploaded when `version` changes).
-    pub mesh: Arc<ContourMesh>,
+    /// Geometry, ready for the GPU (uploaded when `version` changes).
+    pub mesh: Arc<PreparedMesh>,
     /// Bumped when the geometry changes.
     pub version: u64,
     /// Colour.
@@ -28,6 +28,28 @@ pub struct SceneMesh {
     pub visible: bool,
     /// Drawn with the selection rim.
     pub highlighted: bool,
+}
+
+/// Bytes of mesh data copied to the GPU per frame at most (one mesh of
+/// ~300k triangles goes in whole). Bigger scenes, like every contour of
+/// a brain at one isovalue, arrive over several frames instead of
+/// holding one frame for 100 ms: copying into fresh buffers costs a page
+/// fault per 4 KiB besides the copy.
+pub const UPLOAD_BUDGET: u64 = 8 << 20;
+
+/// `mesh` made ready for the GPU, for the threads that extract contours
+/// (a contour mesh is always well formed; None would mean a bug, logged).
+pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
+    match PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices) {
+        Ok(m) => Some(Arc::new(m)),
+        Err(e) => {
+            eprintln!(
+                "flexiso: contour of arc {:?} cannot be drawn: {e}",
+                mesh.arc
+            );
+            None
+        }
+    }
 }
 
 /// What happened in the view this frame.
@@ -145,15 +167,7 @@ impl View3d {
         }
         for m in scene {
             if self.uploaded.get(&m.id) != Some(&m.version) {
-                let r = renderer.set_mesh(
-                    &rs.device,
-                    &rs.queue,
-                    m.id,
-                    &m.mesh.positions,
-                    &m.mesh.normals,
-                    &m.mesh.indices,
-                );
-                match r {
+                match renderer.set_prepared_mesh(&rs.device, m.id, Arc::clone(&m.mesh)) {
                     Ok(()) => {
                         self.uploaded.insert(m.id, m.version);
                     }
@@ -161,6 +175,9 @@ impl View3d {
                 }
             }
             renderer.set_style(m.id, rgba(m.colour), m.visible, m.highlighted);
+        }
+        if renderer.upload_pending(&rs.device, &rs.queue, UPLOAD_BUDGET) {
+            ui.ctx().request_repaint();
         }
 
         // Camera.

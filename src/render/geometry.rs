@@ -1,12 +1,13 @@
-//! CPU-side geometry: the copies of the meshes kept for picking, ray casts,
-//! vertex normals and a test sphere.
+//! CPU-side geometry: meshes prepared for the GPU (and kept for picking),
+//! ray casts, vertex normals and a test sphere.
 //!
 //! Picking casts the ray on the CPU against every triangle of each mesh
 //! whose bounding box the ray enters, nearest box first, stopping once a
 //! box starts beyond the nearest hit. This needs no GPU round trip, is exact
-//! and handles transparent meshes; it costs 24 bytes per triangle-and-vertex
-//! pair of extra memory (12 per vertex, 12 per triangle) and about 5 ns per
-//! triangle tested (rayon splits meshes above [`PARALLEL_TRIANGLES`]).
+//! and handles transparent meshes; it reads the [`PreparedMesh`] the vertex
+//! buffer was filled from (24 bytes per vertex, 12 per triangle, the same
+//! as the GPU's copy) and costs about 5 ns per triangle tested (rayon
+//! splits meshes above [`PARALLEL_TRIANGLES`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -14,31 +15,109 @@ use rayon::prelude::*;
 /// Meshes with more triangles than this are ray-tested in parallel.
 pub const PARALLEL_TRIANGLES: usize = 200_000;
 
-/// A mesh's positions and triangles as kept on the CPU, with its box.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct CpuMesh {
-    /// Vertex positions.
-    pub positions: Vec<[f32; 3]>,
-    /// Triangle corners, three per triangle, each `< positions.len()`.
-    pub indices: Vec<u32>,
+/// A mesh made ready for the GPU: validated, normals computed when it came
+/// without, positions and normals interleaved as the vertex buffer holds
+/// them, with its box. Building one costs a few passes over the mesh, so
+/// the app builds it on the thread that extracted the contour and the UI
+/// thread only copies bytes ([`Renderer::set_prepared_mesh`]). The renderer
+/// keeps it (shared) as its CPU copy for picking.
+///
+/// [`Renderer::set_prepared_mesh`]: super::Renderer::set_prepared_mesh
+#[derive(Clone, Debug)]
+pub struct PreparedMesh {
+    /// Position then normal of each vertex.
+    pub(crate) vertices: Vec<[f32; 6]>,
+    /// Triangle corners, three per triangle, each `< vertices.len()`.
+    pub(crate) indices: Vec<u32>,
     /// Axis-aligned bounding box (min, max); inverted (min > max) when empty.
-    pub bbox: (Vec3, Vec3),
+    pub(crate) bbox: (Vec3, Vec3),
     /// Whether counter-clockwise triangles face outwards: the signed volume
     /// enclosed is positive. Exact for closed meshes, a majority vote for
     /// open ones; decides the draw order of a transparent mesh's halves.
-    pub ccw_outward: bool,
+    pub(crate) ccw_outward: bool,
 }
 
-impl CpuMesh {
-    /// Copies a mesh whose indices have been checked against `positions`.
-    pub fn new(positions: &[[f32; 3]], indices: &[u32]) -> Self {
+impl Default for PreparedMesh {
+    fn default() -> Self {
+        PreparedMesh {
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            bbox: bbox_of(&[], &[]),
+            ccw_outward: true,
+        }
+    }
+}
+
+impl PreparedMesh {
+    /// Checks and interleaves a mesh. `normals` has one normal per
+    /// position, or is empty to have them computed from the triangles
+    /// ([`compute_normals`]); `indices` holds three corners per triangle.
+    /// The error says what is malformed.
+    pub fn new(
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        indices: &[u32],
+    ) -> Result<Self, String> {
+        if !normals.is_empty() && normals.len() != positions.len() {
+            return Err(format!(
+                "{} normals for {} positions",
+                normals.len(),
+                positions.len()
+            ));
+        }
+        if !indices.len().is_multiple_of(3) {
+            return Err(format!(
+                "{} indices is not a whole number of triangles",
+                indices.len()
+            ));
+        }
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(format!(
+                "index {bad} is out of range for {} positions",
+                positions.len()
+            ));
+        }
+        if indices.len() > u32::MAX as usize {
+            return Err(format!(
+                "{} triangles are too many to draw",
+                indices.len() / 3
+            ));
+        }
+        let computed;
+        let normals = if normals.is_empty() {
+            computed = compute_normals(positions, indices);
+            &computed[..]
+        } else {
+            normals
+        };
+        let vertices = positions
+            .iter()
+            .zip(normals)
+            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
+            .collect();
         let bbox = bbox_of(positions, indices);
-        CpuMesh {
-            positions: positions.to_vec(),
+        Ok(PreparedMesh {
+            vertices,
             indices: indices.to_vec(),
             bbox,
             ccw_outward: signed_volume(positions, indices, bbox) >= 0.0,
-        }
+        })
+    }
+
+    /// Number of triangles.
+    pub fn num_triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Bytes the GPU buffers take (vertices and indices).
+    pub fn gpu_bytes(&self) -> u64 {
+        (std::mem::size_of_val(&self.vertices[..]) + std::mem::size_of_val(&self.indices[..]))
+            as u64
+    }
+
+    fn position(&self, i: u32) -> Vec3 {
+        let v = &self.vertices[i as usize];
+        Vec3::new(v[0], v[1], v[2])
     }
 
     /// Centre of the bounding box (for back-to-front sorting).
@@ -54,7 +133,7 @@ impl CpuMesh {
     /// `(t, point)`.
     pub fn ray_hit(&self, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3)> {
         let test = |tri: &[u32]| -> Option<f32> {
-            let p = |k: usize| Vec3::from(self.positions[tri[k] as usize]);
+            let p = |k: usize| self.position(tri[k]);
             ray_triangle(origin, dir, p(0), p(1), p(2))
         };
         let best = if self.indices.len() / 3 > PARALLEL_TRIANGLES {
@@ -262,7 +341,7 @@ mod tests {
     #[test]
     fn ray_hits_the_near_side_of_a_sphere() {
         let (p, _, i) = icosphere([0.0, 0.0, 0.0], 1.0, 3);
-        let m = CpuMesh::new(&p, &i);
+        let m = PreparedMesh::new(&p, &[], &i).expect("a valid mesh");
         let (t, hit) = m
             .ray_hit(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0))
             .expect("hit");
@@ -277,11 +356,19 @@ mod tests {
     #[test]
     fn winding_orientation_is_detected() {
         let (p, _, mut i) = icosphere([5.0, 0.0, 0.0], 1.0, 1);
-        assert!(CpuMesh::new(&p, &i).ccw_outward);
+        assert!(
+            PreparedMesh::new(&p, &[], &i)
+                .expect("a valid mesh")
+                .ccw_outward
+        );
         for t in i.chunks_exact_mut(3) {
             t.swap(1, 2);
         }
-        assert!(!CpuMesh::new(&p, &i).ccw_outward);
+        assert!(
+            !PreparedMesh::new(&p, &[], &i)
+                .expect("a valid mesh")
+                .ccw_outward
+        );
     }
 
     #[test]

@@ -55,10 +55,13 @@
 //!   light from the upper left; the side a normal points away from is
 //!   darker. Normals need not be consistent with the triangle winding.
 //! - MSAA 4× when [`Renderer::sample_count_for`] says the adapter can.
-//! - Geometry is uploaded only in [`Renderer::set_mesh`]; styles, bounds and
-//!   camera changes cost a uniform write. Picking is a CPU ray cast against
-//!   a CPU copy of each mesh (12 bytes per vertex + 12 per triangle), see
-//!   [`geometry`] for the cost.
+//! - Geometry is uploaded only by [`Renderer::set_mesh`] (at once) or by
+//!   [`Renderer::set_prepared_mesh`] + [`Renderer::upload_pending`] (a
+//!   [`PreparedMesh`] built on another thread, copied within a byte budget
+//!   per frame, the old geometry drawn until the new is complete); styles,
+//!   bounds and camera changes cost a uniform write. Picking is a CPU ray
+//!   cast against the prepared mesh the renderer keeps, see [`geometry`]
+//!   for the cost.
 
 mod camera;
 mod egui_texture;
@@ -68,7 +71,7 @@ mod renderer;
 
 pub use camera::Camera;
 pub use egui_texture::EguiTexture;
-pub use geometry::{compute_normals, icosphere};
+pub use geometry::{PreparedMesh, compute_normals, icosphere};
 pub use headless::{Gpu, HeadlessMesh, render_to_image};
 pub use renderer::{
     COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,

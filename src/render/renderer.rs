@@ -1,13 +1,14 @@
 //! The offscreen mesh renderer (see the module doc of [`crate::render`]).
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::RenderError;
 use super::camera::Camera;
-use super::geometry::{CpuMesh, ray_box};
+use super::geometry::{PreparedMesh, ray_box};
 
 /// Format of the colour texture [`Renderer::render`] produces: plain
 /// (not sRGB-aware) RGBA8 holding sRGB-encoded colour, which is what egui
@@ -72,10 +73,13 @@ struct StyleUniform {
 
 /// One mesh: the CPU copy for picking, its GPU buffers and style.
 struct Mesh {
-    cpu: CpuMesh,
+    /// What the buffers hold.
+    cpu: Arc<PreparedMesh>,
     vertex_buffer: Option<wgpu::Buffer>,
     index_buffer: Option<wgpu::Buffer>,
     index_count: u32,
+    /// Newer geometry on its way to the GPU.
+    pending: Option<PendingUpload>,
     style: MeshStyle,
     style_buffer: wgpu::Buffer,
     style_bind: wgpu::BindGroup,
@@ -86,6 +90,15 @@ impl Mesh {
     fn drawn(&self) -> bool {
         self.style.visible && self.style.colour[3] > 0.0 && self.index_count > 0
     }
+}
+
+/// A mesh being copied to the GPU, possibly over several frames.
+struct PendingUpload {
+    mesh: Arc<PreparedMesh>,
+    /// Fresh vertex and index buffers, once a partial copy has begun.
+    buffers: Option<(wgpu::Buffer, wgpu::Buffer)>,
+    /// Bytes copied so far: the vertices, then the indices.
+    written: u64,
 }
 
 /// The render targets, recreated when the size changes.
@@ -345,12 +358,13 @@ impl Renderer {
         self.sample_count
     }
 
-    /// Adds or replaces mesh `id`. `normals` has one normal per position, or
-    /// is empty to have them computed from the triangles
-    /// ([`compute_normals`](super::compute_normals)); `indices` holds three
-    /// corners per triangle. A replaced mesh keeps its style; buffers are
-    /// reused when the new data fits. An empty mesh is kept (and draws
-    /// nothing). Errors leave the previous mesh in place.
+    /// Adds or replaces mesh `id` and uploads it at once. `normals` has one
+    /// normal per position, or is empty to have them computed from the
+    /// triangles ([`compute_normals`](super::compute_normals)); `indices`
+    /// holds three corners per triangle. A replaced mesh keeps its style;
+    /// buffers are reused when the new data fits. An empty mesh is kept
+    /// (and draws nothing). Errors leave the previous mesh in place. Also
+    /// finishes every upload still pending.
     pub fn set_mesh(
         &mut self,
         device: &wgpu::Device,
@@ -360,97 +374,170 @@ impl Renderer {
         normals: &[[f32; 3]],
         indices: &[u32],
     ) -> Result<(), RenderError> {
-        let invalid = |reason: String| RenderError::InvalidMesh { id, reason };
-        if !normals.is_empty() && normals.len() != positions.len() {
-            return Err(invalid(format!(
-                "{} normals for {} positions",
-                normals.len(),
-                positions.len()
-            )));
-        }
-        if !indices.len().is_multiple_of(3) {
-            return Err(invalid(format!(
-                "{} indices is not a whole number of triangles",
-                indices.len()
-            )));
-        }
-        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
-            return Err(invalid(format!(
-                "index {bad} is out of range for {} positions",
-                positions.len()
-            )));
-        }
+        let mesh = PreparedMesh::new(positions, normals, indices)
+            .map_err(|reason| RenderError::InvalidMesh { id, reason })?;
+        self.set_prepared_mesh(device, id, Arc::new(mesh))?;
+        self.upload_pending(device, queue, u64::MAX);
+        Ok(())
+    }
+
+    /// Adds or replaces mesh `id` with a mesh prepared elsewhere (another
+    /// thread), to be copied to the GPU by [`Renderer::upload_pending`]:
+    /// until then the previous geometry, if any, is drawn. A replaced mesh
+    /// keeps its style. Errors (beyond the device's buffer limit) leave the
+    /// previous mesh in place.
+    pub fn set_prepared_mesh(
+        &mut self,
+        device: &wgpu::Device,
+        id: u64,
+        mesh: Arc<PreparedMesh>,
+    ) -> Result<(), RenderError> {
         let max = device.limits().max_buffer_size;
-        let vertex_bytes = positions.len() as u64 * VERTEX_BYTES;
-        let index_bytes = indices.len() as u64 * 4;
-        if vertex_bytes > max || index_bytes > max || indices.len() > u32::MAX as usize {
-            return Err(invalid(format!(
-                "{} vertices and {} triangles exceed the device's buffer limit of {max} bytes",
-                positions.len(),
-                indices.len() / 3
-            )));
+        let vertex_bytes = mesh.vertices.len() as u64 * VERTEX_BYTES;
+        let index_bytes = mesh.indices.len() as u64 * 4;
+        if vertex_bytes > max || index_bytes > max {
+            return Err(RenderError::InvalidMesh {
+                id,
+                reason: format!(
+                    "{} vertices and {} triangles exceed the device's buffer limit of {max} bytes",
+                    mesh.vertices.len(),
+                    mesh.num_triangles()
+                ),
+            });
         }
-
-        let computed;
-        let normals = if normals.is_empty() {
-            computed = super::compute_normals(positions, indices);
-            &computed[..]
-        } else {
-            normals
-        };
-        let mut vertices = Vec::with_capacity(positions.len() * 6);
-        for (p, n) in positions.iter().zip(normals) {
-            vertices.extend_from_slice(p);
-            vertices.extend_from_slice(n);
-        }
-
-        let entry = match self.meshes.remove(&id) {
-            Some(old) => old,
-            None => {
-                let (style_buffer, style_bind) = self.style_resources(device);
+        if !self.meshes.contains_key(&id) {
+            let (style_buffer, style_bind) = self.style_resources(device);
+            self.meshes.insert(
+                id,
                 Mesh {
-                    cpu: CpuMesh::default(),
+                    cpu: Arc::default(),
                     vertex_buffer: None,
                     index_buffer: None,
                     index_count: 0,
+                    pending: None,
                     style: MeshStyle::default(),
                     style_buffer,
                     style_bind,
                     style_dirty: true,
-                }
-            }
-        };
-        let mut entry = entry;
-        let empty = indices.is_empty();
-        entry.vertex_buffer = if empty {
-            None
-        } else {
-            Some(upload(
-                device,
-                queue,
-                entry.vertex_buffer.take(),
-                bytemuck::cast_slice(&vertices),
-                wgpu::BufferUsages::VERTEX,
-                "flexiso mesh vertices",
-            ))
-        };
-        entry.index_buffer = if empty {
-            None
-        } else {
-            Some(upload(
-                device,
-                queue,
-                entry.index_buffer.take(),
-                bytemuck::cast_slice(indices),
-                wgpu::BufferUsages::INDEX,
-                "flexiso mesh indices",
-            ))
-        };
-        entry.index_count = indices.len() as u32;
-        entry.cpu = CpuMesh::new(positions, indices);
-        self.meshes.insert(id, entry);
-        self.scene_version += 1;
+                },
+            );
+        }
+        if let Some(entry) = self.meshes.get_mut(&id) {
+            entry.pending = Some(PendingUpload {
+                mesh,
+                buffers: None,
+                written: 0,
+            });
+        }
         Ok(())
+    }
+
+    /// Copies at most `budget` bytes of the pending meshes to the GPU, in
+    /// id order; true while some remain. A mesh that fits in what is left
+    /// of the budget goes in whole (into its old buffers when they are big
+    /// enough); a larger one is copied into fresh buffers over several
+    /// calls and replaces the old geometry when complete. So a frame can
+    /// bound its upload time however big the meshes are.
+    pub fn upload_pending(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        budget: u64,
+    ) -> bool {
+        // Write offsets and sizes stay multiples of COPY_BUFFER_ALIGNMENT.
+        let mut budget = budget - budget % wgpu::COPY_BUFFER_ALIGNMENT;
+        let mut changed = false;
+        let mut left = false;
+        for entry in self.meshes.values_mut() {
+            let Some(pending) = &mut entry.pending else {
+                continue;
+            };
+            let mesh = Arc::clone(&pending.mesh);
+            let vertices: &[u8] = bytemuck::cast_slice(&mesh.vertices);
+            let indices: &[u8] = bytemuck::cast_slice(&mesh.indices);
+            let total = (vertices.len() + indices.len()) as u64;
+            let (vb, ib) = if mesh.indices.is_empty() {
+                (None, None)
+            } else if pending.written == 0 && total <= budget {
+                budget -= total;
+                (
+                    Some(upload(
+                        device,
+                        queue,
+                        entry.vertex_buffer.take(),
+                        vertices,
+                        wgpu::BufferUsages::VERTEX,
+                        "flexiso mesh vertices",
+                    )),
+                    Some(upload(
+                        device,
+                        queue,
+                        entry.index_buffer.take(),
+                        indices,
+                        wgpu::BufferUsages::INDEX,
+                        "flexiso mesh indices",
+                    )),
+                )
+            } else {
+                if budget == 0 {
+                    left = true;
+                    continue;
+                }
+                let (vb, ib) = pending.buffers.get_or_insert_with(|| {
+                    (
+                        new_buffer(
+                            device,
+                            vertices.len() as u64,
+                            wgpu::BufferUsages::VERTEX,
+                            "flexiso mesh vertices",
+                        ),
+                        new_buffer(
+                            device,
+                            indices.len() as u64,
+                            wgpu::BufferUsages::INDEX,
+                            "flexiso mesh indices",
+                        ),
+                    )
+                });
+                // Vertices first, then indices, in chunks of what the
+                // budget allows.
+                for (buffer, bytes, start) in [
+                    (&*vb, vertices, 0u64),
+                    (&*ib, indices, vertices.len() as u64),
+                ] {
+                    let end = start + bytes.len() as u64;
+                    if pending.written >= end || budget == 0 {
+                        continue;
+                    }
+                    let from = pending.written - start;
+                    let n = (end - pending.written).min(budget);
+                    queue.write_buffer(buffer, from, &bytes[from as usize..(from + n) as usize]);
+                    pending.written += n;
+                    budget -= n;
+                }
+                if pending.written < total {
+                    left = true;
+                    continue;
+                }
+                let (vb, ib) = pending.buffers.take().expect("buffers were created above");
+                (Some(vb), Some(ib))
+            };
+            entry.vertex_buffer = vb;
+            entry.index_buffer = ib;
+            entry.index_count = mesh.indices.len() as u32;
+            entry.cpu = mesh;
+            entry.pending = None;
+            changed = true;
+        }
+        if changed {
+            self.scene_version += 1;
+        }
+        left
+    }
+
+    /// Whether some mesh waits for [`Renderer::upload_pending`].
+    pub fn has_pending_uploads(&self) -> bool {
+        self.meshes.values().any(|m| m.pending.is_some())
     }
 
     fn style_resources(&self, device: &wgpu::Device) -> (wgpu::Buffer, wgpu::BindGroup) {
@@ -862,20 +949,34 @@ fn upload(
         queue.write_buffer(&b, 0, data);
         return b;
     }
-    let max = device.limits().max_buffer_size;
-    let size = (data.len() as u64 + data.len() as u64 / 4)
-        .min(max)
-        .max(data.len() as u64);
-    // COPY_BUFFER_ALIGNMENT: sizes of mapped/written buffers are multiples of 4.
-    let size = size.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+    let buffer = new_buffer(
+        device,
+        data.len() as u64 + data.len() as u64 / 4,
+        usage,
+        label,
+    );
+    queue.write_buffer(&buffer, 0, data);
+    buffer
+}
+
+/// A buffer of at least `len` bytes (capped at the device's limit, and a
+/// multiple of COPY_BUFFER_ALIGNMENT) that can be written to.
+fn new_buffer(
+    device: &wgpu::Device,
+    len: u64,
+    usage: wgpu::BufferUsages,
+    label: &str,
+) -> wgpu::Buffer {
+    let size = len
+        .min(device.limits().max_buffer_size)
+        .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
+        .max(wgpu::COPY_BUFFER_ALIGNMENT);
+    device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size,
         usage: usage | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
-    });
-    queue.write_buffer(&buffer, 0, data);
-    buffer
+    })
 }
 
 /// The 8 corners and 12 edges of a box.
