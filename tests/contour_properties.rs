@@ -354,3 +354,35 @@ fn seeds_in_simplified_chains_land_on_the_spanning_superarc() {
     }
     assert!(extracted > 10, "the test exercised chains");
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    /// A follower built on the tables of followers of other fields (of
+    /// other sizes, and of the same size) extracts what a fresh one does:
+    /// the explorer's worker carries them from job to job.
+    #[test]
+    fn follower_tables_carried_across_fields_give_the_same_contours(
+        a in random_field(),
+        b in random_field(),
+        h in 0u32..14,
+    ) {
+        let iso = Isovalue::new(h as f64 / 2.0);
+        let mut scratch = flexiso::contour::FollowerScratch::default();
+        // a, b, a again: the table is sized for b, then for a with b's
+        // records left in it.
+        for field in [&a, &b, &a] {
+            let tree = tree_of(field);
+            for arc in 0..tree.arcs().len() as u32 {
+                let Some(seed) = path_seed(&tree, field, ArcId(arc), iso) else {
+                    continue;
+                };
+                let fresh = ContourFollower::new(field).follow(&seed, iso);
+                let mut carried = ContourFollower::with_scratch(field, std::mem::take(&mut scratch));
+                let mesh = carried.follow(&seed, iso);
+                scratch = carried.into_scratch();
+                prop_assert_eq!(mesh, fresh);
+            }
+        }
+    }
+}

@@ -16,7 +16,9 @@ use egui::Color32;
 
 use super::view3d::prepare;
 
-use crate::contour::{ContourFollower, ContourMesh, Isovalue, MeshTopology, path_seed};
+use crate::contour::{
+    ContourFollower, ContourMesh, FollowerScratch, Isovalue, MeshTopology, path_seed,
+};
 use crate::field::ScalarField;
 use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
@@ -143,6 +145,8 @@ impl Extractor {
                 // Newest request per contour, and meshes still to measure.
                 let mut latest: HashMap<u64, Job> = HashMap::new();
                 let mut to_measure: Vec<(u64, u64, Arc<ContourMesh>)> = Vec::new();
+                // The follower's tables, kept from one job to the next.
+                let mut scratch = FollowerScratch::default();
                 loop {
                     if latest.is_empty() && to_measure.is_empty() {
                         match jobs.recv() {
@@ -162,7 +166,8 @@ impl Extractor {
                         for j in batch {
                             let t = std::time::Instant::now();
                             let mesh =
-                                extract_mesh(&j.field, &j.tree, j.superarc, j.h).map(Arc::new);
+                                extract_mesh(&j.field, &j.tree, j.superarc, j.h, &mut scratch)
+                                    .map(Arc::new);
                             let ms = t.elapsed().as_secs_f64() * 1e3;
                             let gpu = mesh.as_deref().and_then(prepare);
                             if let Some(m) = &mesh {
@@ -476,15 +481,26 @@ fn extract_mesh(
     tree: &ContourTree,
     superarc: ArcId,
     h: f64,
+    scratch: &mut FollowerScratch,
 ) -> Option<ContourMesh> {
     let iso = Isovalue::new(h);
-    path_seed(tree, field, superarc, iso).map(|seed| ContourFollower::new(field).follow(&seed, iso))
+    let seed = path_seed(tree, field, superarc, iso)?;
+    let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
+    let mesh = follower.follow(&seed, iso);
+    *scratch = follower.into_scratch();
+    Some(mesh)
 }
 
 /// Extracts the contour of `c.superarc` at `c.h` into `c`, at once.
 pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
     let t = std::time::Instant::now();
-    let mesh = extract_mesh(field, tree, c.superarc, c.h);
+    let mesh = extract_mesh(
+        field,
+        tree,
+        c.superarc,
+        c.h,
+        &mut FollowerScratch::default(),
+    );
     c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
     c.topology = mesh
         .as_ref()

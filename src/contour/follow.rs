@@ -238,7 +238,48 @@ fn record(slot: &mut [u32], records: &mut Vec<VertexRecord>, v: u32) -> usize {
     s
 }
 
+/// The tables of a [`ContourFollower`] without its field: a thread that
+/// extracts contours of whichever field its jobs name keeps one, so that
+/// each new follower finds its memory already committed (a fresh slot
+/// table costs a page fault per 4 KiB the contour touches, as much as
+/// following a large contour itself).
+#[derive(Default)]
+pub struct FollowerScratch {
+    slot: Vec<u32>,
+    records: Vec<VertexRecord>,
+    stack: Vec<TetRef>,
+    vertex_edges: Vec<(u32, u32, f32)>,
+}
+
 impl<'f> ContourFollower<'f> {
+    /// A follower for `field` that starts with the tables of an earlier
+    /// one (any field: slots are only trusted when their record names them
+    /// back, see the type's doc).
+    pub fn with_scratch(field: &'f ScalarField, scratch: FollowerScratch) -> Self {
+        let mut f = Self::new(field);
+        let FollowerScratch {
+            slot,
+            mut records,
+            mut stack,
+            mut vertex_edges,
+        } = scratch;
+        records.clear();
+        stack.clear();
+        vertex_edges.clear();
+        (f.slot, f.records, f.stack, f.vertex_edges) = (slot, records, stack, vertex_edges);
+        f
+    }
+
+    /// Gives the tables back for the next follower.
+    pub fn into_scratch(self) -> FollowerScratch {
+        FollowerScratch {
+            slot: self.slot,
+            records: self.records,
+            stack: self.stack,
+            vertex_edges: self.vertex_edges,
+        }
+    }
+
     /// A follower for `field`.
     pub fn new(field: &'f ScalarField) -> Self {
         let dims = field.dims();
@@ -266,7 +307,10 @@ impl<'f> ContourFollower<'f> {
             return out;
         }
         if self.slot.len() != self.field.len() {
-            // Zeroed memory: the system hands out pages lazily.
+            // Zeroed memory: the system hands out pages lazily. (A table of
+            // another field's size is dropped rather than resized: resizing
+            // would copy it.)
+            self.slot = Vec::new();
             self.slot = vec![0; self.field.len()];
         }
         let field = self.field;

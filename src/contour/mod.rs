@@ -48,7 +48,7 @@ pub mod seed;
 mod sweep;
 pub mod topology;
 
-pub use follow::ContourFollower;
+pub use follow::{ContourFollower, FollowerScratch};
 pub use global::{
     all_contours, all_contours_by_following, contours_through, follow_all, marching_tetrahedra,
 };
