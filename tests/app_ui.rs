@@ -101,7 +101,7 @@ fn clicking_an_arc_selects_its_contour_and_a_mesh_appears_in_the_scene() {
     assert_eq!(sel.len(), 1, "one contour selected by the click");
     let c = &sel[0];
     assert_eq!(
-        app.tree_panel().live_arc_of(c.superarc),
+        app.level().expect("a level").live_arc_of(c.superarc),
         Some(arc),
         "the contour is on the clicked arc"
     );
@@ -310,7 +310,12 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
     );
     let mut on: Vec<SimpArcId> = sel
         .iter()
-        .map(|c| app.tree_panel().live_arc_of(c.superarc).expect("live"))
+        .map(|c| {
+            app.level()
+                .expect("a level")
+                .live_arc_of(c.superarc)
+                .expect("live")
+        })
         .collect();
     on.sort();
     let mut want = ups.clone();

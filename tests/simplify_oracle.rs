@@ -322,6 +322,16 @@ fn check_levels(field: &ScalarField) {
             assert_eq!(level.num_arcs(), sim.curve()[k].arcs);
             check_valid(&level, &tree, field);
             direct.push(snapshot(&level));
+            // The live arc of each superarc, against a scan of the chains.
+            let mut owner = vec![None; tree.arcs().len()];
+            for a in level.arcs() {
+                for e in a.chain {
+                    owner[e.0 as usize] = Some(a.id);
+                }
+            }
+            for (e, o) in owner.iter().enumerate() {
+                assert_eq!(level.live_arc_of(flexiso::tree::ArcId(e as u32)), *o);
+            }
         }
         // Up then down, down then up, and back to the full tree.
         for k in (0..=steps).rev() {

@@ -29,6 +29,8 @@ pub struct TreeLayout {
     /// Number of pruning steps: branch `k < steps` is pruned at step `k`,
     /// the others are roots (never pruned).
     steps: usize,
+    /// Per branch: its place in `order`.
+    position: Vec<u32>,
 }
 
 impl TreeLayout {
@@ -145,10 +147,42 @@ impl TreeLayout {
                 }
             }
         }
+        let mut position = vec![NONE; order.len().max(branches)];
+        for (i, &b) in order.iter().enumerate() {
+            position[b as usize] = i as u32;
+        }
         Self {
             node_branch,
             order,
             steps: nsteps,
+            position,
+        }
+    }
+
+    /// Writes the columns of the nodes live at `level` into `columns`
+    /// (indexed by node id, grown as needed; other entries are left as
+    /// they were): the same as [`TreeLayout::columns`] on those nodes, in
+    /// O(a log a) for a live arcs instead of O(tree), so moving the level
+    /// of a tree of millions of arcs costs the UI thread only what it
+    /// shows.
+    pub fn live_columns(&self, level: &SimplifiedTree, columns: &mut Vec<f32>) {
+        let nodes = level.nodes();
+        let place = |n: SimpNodeId| {
+            let b = self.node_branch[n.0 as usize];
+            self.position.get(b as usize).copied().unwrap_or(NONE)
+        };
+        let mut places: Vec<u32> = nodes.iter().map(|&n| place(n)).collect();
+        places.sort_unstable();
+        places.dedup();
+        let count = places.len().max(1) as f32;
+        if let Some(last) = nodes.last()
+            && columns.len() <= last.0 as usize
+        {
+            columns.resize(last.0 as usize + 1, f32::NAN);
+        }
+        for n in nodes {
+            let rank = places.partition_point(|&p| p < place(n));
+            columns[n.0 as usize] = (rank as f32 + 0.5) / count;
         }
     }
 
@@ -205,6 +239,44 @@ mod tests {
                 xs.push(x);
             }
             assert!(!xs.is_empty());
+        }
+    }
+
+    #[test]
+    fn live_columns_equal_the_full_pass_at_every_level() {
+        for (field, measure) in [
+            (Synthetic::cube(24).generate(), Measure::Hypervolume),
+            (Synthetic::cube(20).generate(), Measure::Height),
+            (
+                Synthetic {
+                    noise: 0.1,
+                    ..Synthetic::cube(16)
+                }
+                .generate(),
+                Measure::Volume,
+            ),
+        ] {
+            let (tree, _) =
+                ContourTree::from_field(&field, &crate::progress::Progress::new()).unwrap();
+            let sim = Arc::new(Simplification::new(&tree, &field, measure));
+            let layout = TreeLayout::new(&sim);
+            let mut level = SimplifiedTree::new(Arc::clone(&sim));
+            let mut live = Vec::new();
+            // Down every level, then jumps back up: entries of nodes that
+            // were live earlier stay behind and must not matter.
+            let last = sim.steps().len();
+            let order: Vec<usize> = (0..=last).chain([last / 2, 0, last / 3]).collect();
+            for step in order {
+                level.set_step(step);
+                let full = layout.columns(&level);
+                layout.live_columns(&level, &mut live);
+                for n in level.nodes() {
+                    assert_eq!(
+                        live[n.0 as usize], full[n.0 as usize],
+                        "node {n:?} at step {step}"
+                    );
+                }
+            }
         }
     }
 }

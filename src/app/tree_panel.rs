@@ -15,7 +15,6 @@ use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2, pos2, vec2};
 
 use crate::contour::{Isovalue, path_seed_in_chain};
 use crate::simplify::{SimpArcId, SimplifiedTree};
-use crate::tree::ArcId;
 
 use super::pipeline::Dataset;
 use super::selection::Selection;
@@ -58,13 +57,10 @@ pub struct TreePanel {
     zoom: f32,
     pan: Vec2,
     drag: Option<Drag>,
-    /// Node columns at `columns_key`.
+    /// Node columns at `columns_key` (only live nodes' entries are
+    /// current).
     columns: Vec<f32>,
     columns_key: Option<(usize, usize)>,
-    /// Per original superarc: the live arc whose chain holds it (u32::MAX
-    /// when pruned), at `owner_key`.
-    owner: Vec<u32>,
-    owner_key: Option<(usize, usize)>,
     /// What the last frame drew.
     pub drawn: Drawn,
     /// The arc under the pointer.
@@ -160,29 +156,14 @@ impl TreePanel {
         *self = Self::new();
     }
 
-    /// The live arc holding superarc `s` at this level.
-    pub fn live_arc_of(&self, s: ArcId) -> Option<SimpArcId> {
-        self.owner
-            .get(s.0 as usize)
-            .filter(|&&a| a != u32::MAX)
-            .map(|&a| SimpArcId(a))
-    }
-
     fn refresh(&mut self, ds: &Dataset, level: &SimplifiedTree) {
         let key = (level.step(), std::sync::Arc::as_ptr(&ds.sim) as usize);
         if self.columns_key != Some(key) {
-            self.columns = ds.layout.columns(level);
-            self.columns_key = Some(key);
-        }
-        if self.owner_key != Some(key) {
-            self.owner.clear();
-            self.owner.resize(ds.tree.arcs().len(), u32::MAX);
-            for a in level.arcs() {
-                for s in a.chain {
-                    self.owner[s.0 as usize] = a.id.0;
-                }
+            if self.columns_key.is_none_or(|(_, sim)| sim != key.1) {
+                self.columns.clear();
             }
-            self.owner_key = Some(key);
+            ds.layout.live_columns(level, &mut self.columns);
+            self.columns_key = Some(key);
         }
     }
 
@@ -241,7 +222,7 @@ impl TreePanel {
         // Markers: each selected contour on the live arc holding it.
         let mut markers: Vec<(u64, Pos2, Color32, SimpArcId)> = Vec::new();
         for c in &sel.contours {
-            if let Some(a) = self.live_arc_of(c.superarc) {
+            if let Some(a) = level.live_arc_of(c.superarc) {
                 let la = level.arc(a);
                 let (pu, pl) = (node_pos(la.upper), node_pos(la.lower));
                 let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
@@ -519,14 +500,14 @@ impl TreePanel {
         };
         // The dragged contour first, so it keeps following the pointer.
         let mut starts: Vec<SimpArcId> = Vec::new();
-        let lead = sel.get(id).and_then(|c| self.live_arc_of(c.superarc));
+        let lead = sel.get(id).and_then(|c| level.live_arc_of(c.superarc));
         starts.extend(lead);
         for c in sel
             .contours
             .iter()
             .filter(|c| c.group == group && c.id != id)
         {
-            if let Some(a) = self.live_arc_of(c.superarc) {
+            if let Some(a) = level.live_arc_of(c.superarc) {
                 starts.push(a);
             }
         }

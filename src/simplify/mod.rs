@@ -149,6 +149,12 @@ pub struct Simplification {
     curve: Vec<CurvePoint>,
     base_arcs: usize,
     perturbed_arcs: usize,
+    /// Per original superarc: the collapsed-tree arc whose chain holds it
+    /// (`NONE` for the zero-height ones collapsed into nodes).
+    superarc_base: Vec<u32>,
+    /// Per arc id: the arc made by the reduction that ends it (`NONE` when
+    /// it is pruned or never ends).
+    merged_into: Vec<u32>,
 }
 
 impl Simplification {
@@ -319,6 +325,18 @@ impl Simplification {
             })
             .collect();
         let (chain_start, chain_len, chain) = layout_chains(base, &alive, &parts);
+        let mut superarc_base = vec![NONE; base.perturbed_arcs()];
+        for a in 0..m {
+            let s = chain_start[a] as usize;
+            for e in &chain[s..s + chain_len[a] as usize] {
+                superarc_base[e.0 as usize] = a as u32;
+            }
+        }
+        let mut merged_into = vec![NONE; upper.len()];
+        for (i, &(e1, e2)) in parts.iter().enumerate() {
+            merged_into[e1 as usize] = (m + i) as u32;
+            merged_into[e2 as usize] = (m + i) as u32;
+        }
         Self {
             measure,
             node_vertex,
@@ -336,6 +354,8 @@ impl Simplification {
             curve,
             base_arcs: m,
             perturbed_arcs: base.perturbed_arcs(),
+            superarc_base,
+            merged_into,
         }
     }
 
@@ -648,6 +668,25 @@ impl SimplifiedTree {
         v.sort_unstable();
         v.dedup();
         v.into_iter().map(SimpNodeId).collect()
+    }
+
+    /// The live arc standing for original superarc `s` at this level (the
+    /// one whose chain holds it): from its arc in the collapsed tree up
+    /// through the reductions applied so far, O(those reductions), so
+    /// markers follow their contours without a pass over the tree. None
+    /// when `s` has zero height (collapsed into a node) or lies on a pruned
+    /// branch.
+    pub fn live_arc_of(&self, s: ArcId) -> Option<SimpArcId> {
+        let mut a = *self.sim.superarc_base.get(s.0 as usize)?;
+        while a != NONE {
+            if self.is_live(SimpArcId(a)) {
+                return Some(SimpArcId(a));
+            }
+            // Dead: pruned (no successor), or reduced into an arc made at
+            // an applied step (an arc ends at most once).
+            a = self.sim.merged_into[a as usize];
+        }
+        None
     }
 
     /// True when the arc is live at this level.
