@@ -57,4 +57,14 @@ if len(busy) > 1:
     u = sorted(r[2] for r in busy)
     print(f"while the job ran: {len(busy)} frames; interval median {statistics.median(f):.1f} ms, "
           f"max {f[-1]:.1f} ms; UI thread median {statistics.median(u):.2f} ms, max {u[-1]:.1f} ms")
+idle = [r for r in rows if r[3] == "idle"]
+if idle:
+    u = sorted(r[2] for r in idle)
+    print(f"after: {len(idle)} frames; UI thread median {statistics.median(u):.2f} ms, max {u[-1]:.1f} ms")
+stages, last = [], None
+for t, _, _, s in rows:
+    if s != last:
+        stages.append(f"{s} {t:.1f}s")
+        last = s
+print("stages (seconds since the first frame): " + ", ".join(stages))
 PY

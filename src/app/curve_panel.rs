@@ -5,17 +5,26 @@
 
 use egui_plot::{GridMark, Line, Plot, PlotPoints, Points, VLine};
 
-use crate::simplify::SimplifiedTree;
+use crate::simplify::{Simplification, SimplifiedTree};
 
 /// The curve panel's state.
 #[derive(Default)]
 pub struct CurvePanel {
     /// The plot's screen rect in the last frame (tests drag on it).
     pub plot_rect: Option<egui::Rect>,
-    /// The curve in log10 coordinates (feature size, arcs), cached per
-    /// simplification.
-    points: Vec<[f64; 2]>,
-    key: usize,
+}
+
+/// The curve of `sim` as the panel draws it: log10 feature size against
+/// log10 arcs, decimated to [`CURVE_RESOLUTION`] (computed with the
+/// simplification, off the UI thread: a curve has a point per step).
+pub fn drawn_curve(sim: &Simplification) -> Vec<[f64; 2]> {
+    decimate(
+        sim.curve()
+            .iter()
+            .filter(|p| p.feature_size > 0.0 && p.arcs > 0)
+            .map(|p| [p.feature_size.log10(), (p.arcs as f64).log10()]),
+        CURVE_RESOLUTION,
+    )
 }
 
 /// Decades below which two points of the curve are drawn as one: a
@@ -90,19 +99,13 @@ fn decade_grid(input: egui_plot::GridInput) -> Vec<GridMark> {
 impl CurvePanel {
     /// Draws the curve and the level controls; moves `level`. Returns true
     /// when the level changed.
-    pub fn ui(&mut self, ui: &mut egui::Ui, level: &mut SimplifiedTree) -> bool {
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        level: &mut SimplifiedTree,
+        curve: &[[f64; 2]],
+    ) -> bool {
         let sim = std::sync::Arc::clone(level.simplification());
-        let key = std::sync::Arc::as_ptr(&sim) as usize;
-        if key != self.key || self.points.is_empty() {
-            self.key = key;
-            self.points = decimate(
-                sim.curve()
-                    .iter()
-                    .filter(|p| p.feature_size > 0.0 && p.arcs > 0)
-                    .map(|p| [p.feature_size.log10(), (p.arcs as f64).log10()]),
-                CURVE_RESOLUTION,
-            );
-        }
         let before = level.step();
         let current = level.feature_size();
         let mut target_fs: Option<f64> = None;
@@ -124,7 +127,7 @@ impl CurvePanel {
             ));
         });
 
-        let points = &self.points;
+        let points = curve;
         let cur_x = if current > 0.0 {
             Some(current.log10())
         } else {
@@ -146,7 +149,7 @@ impl CurvePanel {
             .x_grid_spacer(decade_grid)
             .y_grid_spacer(decade_grid)
             .show(ui, |plot_ui| {
-                plot_ui.line(Line::new("curve", PlotPoints::from(points.clone())).width(1.5));
+                plot_ui.line(Line::new("curve", PlotPoints::from(points.to_vec())).width(1.5));
                 if let Some(x) = cur_x {
                     plot_ui.vline(VLine::new("level", x).width(2.0));
                     let y = (level.num_arcs().max(1) as f64).log10();

@@ -304,7 +304,7 @@ impl FlexisoApp {
         let what = match &request {
             Request::Open(i) => i.input.clone(),
             Request::Field { name, .. } => name.clone(),
-            Request::Resimplify(_) => format!("{} simplification", self.measure),
+            Request::Resimplify { .. } => format!("{} simplification", self.measure),
         };
         self.pipeline.start(request, self.measure, what);
     }
@@ -383,12 +383,15 @@ impl FlexisoApp {
                     .dataset
                     .as_ref()
                     .is_some_and(|old| Arc::ptr_eq(&old.field, &ds.field));
-                let mut level = SimplifiedTree::new(Arc::clone(&ds.sim));
-                match (&self.level, same_field) {
-                    // Another measure: keep about as many arcs as before.
-                    (Some(old), true) => level.set_level(old.num_arcs()),
-                    _ => level.set_level(DEFAULT_ARCS),
-                }
+                let mut ds = ds;
+                // Made by the job (about as many arcs as before for
+                // another measure); reaching a level can replay millions
+                // of steps, too slow for the UI thread.
+                let level = ds.first_level.take().unwrap_or_else(|| {
+                    let mut level = SimplifiedTree::new(Arc::clone(&ds.sim));
+                    level.set_level(DEFAULT_ARCS);
+                    level
+                });
                 if !same_field {
                     let (lo, hi) = ds.range;
                     self.global_h = 0.5 * (lo + hi);
@@ -687,7 +690,11 @@ impl FlexisoApp {
         }
         self.measure = measure;
         if let Some(ds) = &self.dataset {
-            self.start(Request::Resimplify(Box::new(ds.clone())));
+            let arcs = self.level.as_ref().map_or(DEFAULT_ARCS, |l| l.num_arcs());
+            self.start(Request::Resimplify {
+                dataset: Box::new(ds.clone()),
+                arcs,
+            });
         }
     }
 
@@ -1097,7 +1104,7 @@ impl eframe::App for FlexisoApp {
                     .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
             });
             ui.separator();
-            self.curve_panel.ui(ui, level);
+            self.curve_panel.ui(ui, level, &ds.curve);
         });
         egui::Panel::right("selection")
             .resizable(true)

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use crate::cli::input::InputArgs;
 use crate::field::ScalarField;
 use crate::progress::Progress;
-use crate::simplify::{CollapsedTree, Measure, Simplification};
+use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
 
 use super::layout::TreeLayout;
@@ -64,6 +64,12 @@ pub struct Dataset {
     pub sim: Arc<Simplification>,
     /// Where the tree panel draws each node.
     pub layout: Arc<TreeLayout>,
+    /// The simplification curve as drawn (log10 feature size, log10 arcs;
+    /// decimated).
+    pub curve: Arc<Vec<[f64; 2]>>,
+    /// The level to show first, made here because reaching it can replay
+    /// millions of steps; the explorer takes it (so clones stay cheap).
+    pub first_level: Option<SimplifiedTree>,
     /// Stage times.
     pub times: StageTimes,
     /// Reader warnings.
@@ -81,8 +87,14 @@ pub enum Request {
         /// The field.
         field: Arc<ScalarField>,
     },
-    /// Recompute only the simplification of a dataset with another measure.
-    Resimplify(Box<Dataset>),
+    /// Recompute only the simplification of a dataset with another
+    /// measure, its first level showing about `arcs` arcs.
+    Resimplify {
+        /// The dataset.
+        dataset: Box<Dataset>,
+        /// Arcs to show at first (those shown before).
+        arcs: usize,
+    },
 }
 
 /// A job's result: the dataset, or a message for the user.
@@ -93,20 +105,22 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
     let cancelled = || "cancelled".to_string();
     let t = Instant::now();
     let (name, path, format, field, warnings) = match request {
-        Request::Resimplify(ds) => {
+        Request::Resimplify { dataset: ds, arcs } => {
             progress.stage("simplify");
             let t = Instant::now();
             let sim = Arc::new(Simplification::from_collapsed(&ds.collapsed, measure));
             let simplify = t.elapsed();
             progress.stage("layout");
             let t = Instant::now();
-            let layout = Arc::new(TreeLayout::new(&sim));
+            let (layout, curve, first_level) = views(&sim, arcs);
             let mut times = ds.times;
             times.simplify = simplify;
             times.layout = t.elapsed();
             return Ok(Dataset {
                 sim,
                 layout,
+                curve,
+                first_level,
                 times,
                 ..*ds
             });
@@ -162,7 +176,7 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
     }
     progress.stage("layout");
     let t = Instant::now();
-    let layout = Arc::new(TreeLayout::new(&sim));
+    let (layout, curve, first_level) = views(&sim, super::DEFAULT_ARCS);
     let times = StageTimes {
         load,
         tree: tree_time,
@@ -180,9 +194,24 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
         collapsed: Arc::new(collapsed),
         sim,
         layout,
+        curve,
+        first_level,
         times,
         warnings,
     })
+}
+
+/// What the panels draw of a simplification: the tree layout, the curve,
+/// and the level of about `arcs` arcs.
+fn views(
+    sim: &Arc<Simplification>,
+    arcs: usize,
+) -> (Arc<TreeLayout>, Arc<Vec<[f64; 2]>>, Option<SimplifiedTree>) {
+    let layout = Arc::new(TreeLayout::new(sim));
+    let curve = Arc::new(super::curve_panel::drawn_curve(sim));
+    let mut level = SimplifiedTree::new(Arc::clone(sim));
+    level.set_level(arcs);
+    (layout, curve, Some(level))
 }
 
 /// The job in flight.
