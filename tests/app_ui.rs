@@ -376,8 +376,25 @@ fn exports_write_meshes_the_tree_as_json_and_the_3d_view_as_png() {
         assert_eq!(n, 1);
         assert!(std::fs::metadata(&path).expect("written").len() > 100);
     }
+    // As the menu does it: written on another thread, reported after.
+    let ply = dir.path().join("background.ply");
+    h.state_mut().start_contour_export(ply.clone());
+    h.state_mut().wait_for_exports();
+    assert_eq!(h.state().error(), None);
+    assert!(
+        h.state()
+            .info()
+            .is_some_and(|i| i.starts_with("wrote 1 contour"))
+    );
+    assert_eq!(
+        std::fs::read(&ply).expect("written"),
+        std::fs::read(dir.path().join("contours.ply")).expect("written"),
+        "the same file as written at once"
+    );
     let json_path = dir.path().join("tree.json");
-    h.state().export_tree_json(&json_path).expect("json");
+    h.state_mut().start_tree_export(json_path.clone());
+    h.state_mut().wait_for_exports();
+    assert!(h.state().info().is_some_and(|i| i.starts_with("wrote")));
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&json_path).expect("read")).expect("parse");
     let shown = h.state().level().expect("level").num_arcs();
@@ -404,6 +421,17 @@ fn exports_write_meshes_the_tree_as_json_and_the_3d_view_as_png() {
         });
         assert!(close, "the screenshot shows the contour");
     }
+    // A failed write is reported; the window goes on.
+    h.state_mut()
+        .start_tree_export(dir.path().join("no_such_dir").join("tree.json"));
+    h.state_mut().wait_for_exports();
+    assert!(
+        h.state()
+            .error()
+            .is_some_and(|e| e.contains("cannot write")),
+        "{:?}",
+        h.state().error()
+    );
 }
 
 #[test]

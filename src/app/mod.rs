@@ -153,6 +153,11 @@ pub struct FlexisoApp {
     info: Option<String>,
     dialog_tx: Sender<Dialog>,
     dialog_rx: Receiver<Dialog>,
+    /// Exports write on their own threads and report here (a message for
+    /// the info line, or an error).
+    export_tx: Sender<Result<String, String>>,
+    export_rx: Receiver<Result<String, String>>,
+    exports_running: usize,
     pending_screenshot: Option<PathBuf>,
     frame_log: Option<FrameLog>,
     /// UI time of the last frame (ms), shown in the status bar.
@@ -177,6 +182,7 @@ impl FlexisoApp {
     /// An explorer with nothing loaded.
     pub fn empty() -> Self {
         let (dialog_tx, dialog_rx) = channel();
+        let (export_tx, export_rx) = channel();
         Self {
             pipeline: Pipeline::new(),
             dataset: None,
@@ -193,6 +199,9 @@ impl FlexisoApp {
             info: None,
             dialog_tx,
             dialog_rx,
+            export_tx,
+            export_rx,
+            exports_running: 0,
             pending_screenshot: None,
             frame_log: None,
             ui_ms: 0.0,
@@ -534,62 +543,165 @@ impl FlexisoApp {
     /// Writes the visible selected contours (or, with none selected, the
     /// contours at h shown) to a mesh file.
     pub fn export_contours(&self, path: &std::path::Path) -> anyhow::Result<usize> {
-        let mut meshes: Vec<ContourMesh> = Vec::new();
+        self.contour_export(path)?()
+    }
+
+    /// What [`FlexisoApp::export_contours`] writes, gathered (cheaply, on
+    /// the UI thread) into a closure that writes it (anywhere).
+    fn contour_export(
+        &self,
+        path: &std::path::Path,
+    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<usize> + Send + 'static> {
+        let mut meshes: Vec<Arc<ContourMesh>> = Vec::new();
         let mut names = Vec::new();
         for c in &self.selection.contours {
             if let Some(m) = &c.mesh
                 && self.selection.shown(c)
             {
-                meshes.push((**m).clone());
+                meshes.push(Arc::clone(m));
                 names.push(format!("contour_{}_h{}", c.id, fmt_value(c.h)));
             }
         }
         if meshes.is_empty() && self.show_all {
             for (i, m) in self.all.meshes.iter().enumerate() {
-                meshes.push((**m).clone());
+                meshes.push(Arc::clone(m));
                 names.push(format!("component_{i}_h{}", fmt_value(self.global_h)));
             }
         }
         if meshes.is_empty() {
             anyhow::bail!("no contour to export: select one in the tree first");
         }
-        crate::contour::export::write_contours(path, &meshes, &names)?;
-        Ok(meshes.len())
+        let path = path.to_path_buf();
+        Ok(move || {
+            crate::contour::export::write_contours(&path, &meshes, &names)?;
+            Ok(meshes.len())
+        })
     }
 
     /// Writes the tree, the collapsed tree and the level shown as JSON.
     pub fn export_tree_json(&self, path: &std::path::Path) -> anyhow::Result<()> {
+        self.tree_export(path)?()
+    }
+
+    /// What [`FlexisoApp::export_tree_json`] writes, as a closure.
+    fn tree_export(
+        &self,
+        path: &std::path::Path,
+    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<()> + Send + 'static> {
         let (Some(ds), Some(level)) = (&self.dataset, &self.level) else {
             anyhow::bail!("no dataset loaded");
         };
-        let mut json = crate::tree::json::tree_json(&ds.tree, &ds.field);
-        if let Some(obj) = json.as_object_mut() {
-            obj.insert(
-                "collapsed".into(),
-                crate::simplify::json::collapsed_tree_json(&ds.collapsed, &ds.tree),
-            );
-            obj.insert(
-                "simplified".into(),
-                crate::simplify::json::simplified_tree_json(level, &ds.tree),
-            );
+        let (tree, field, collapsed) = (
+            Arc::clone(&ds.tree),
+            Arc::clone(&ds.field),
+            Arc::clone(&ds.collapsed),
+        );
+        let level = level.clone();
+        let path = path.to_path_buf();
+        Ok(move || {
+            let mut json = crate::tree::json::tree_json(&tree, &field);
+            if let Some(obj) = json.as_object_mut() {
+                obj.insert(
+                    "collapsed".into(),
+                    crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
+                );
+                obj.insert(
+                    "simplified".into(),
+                    crate::simplify::json::simplified_tree_json(&level, &tree),
+                );
+            }
+            std::fs::write(&path, serde_json::to_string(&json)?)
+                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+            Ok(())
+        })
+    }
+
+    /// Exports the contours as File > Export does: gathered now, written
+    /// on another thread (a whole isosurface is tens of megabytes), the
+    /// outcome in the info line.
+    pub fn start_contour_export(&mut self, p: PathBuf) {
+        match self.contour_export(&p) {
+            Ok(write) => self.export_in_background(move || match write() {
+                Ok(n) => Ok(format!("wrote {n} contour(s) to {}", p.display())),
+                Err(e) => Err(format!("{e:#}")),
+            }),
+            Err(e) => self.error = Some(format!("{e:#}")),
         }
-        std::fs::write(path, serde_json::to_string(&json)?)
-            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
-        Ok(())
+    }
+
+    /// Exports the tree as JSON as File > Export does, on another thread.
+    pub fn start_tree_export(&mut self, p: PathBuf) {
+        match self.tree_export(&p) {
+            Ok(write) => self.export_in_background(move || match write() {
+                Ok(()) => Ok(format!("wrote {}", p.display())),
+                Err(e) => Err(format!("{e:#}")),
+            }),
+            Err(e) => self.error = Some(format!("{e:#}")),
+        }
+    }
+
+    /// The info line (what the last action did), if any.
+    pub fn info(&self) -> Option<&str> {
+        self.info.as_deref()
+    }
+
+    /// Runs an export's writing on its own thread; its outcome shows in
+    /// the info line when done.
+    fn export_in_background(
+        &mut self,
+        write: impl FnOnce() -> Result<String, String> + Send + 'static,
+    ) {
+        let tx = self.export_tx.clone();
+        let ctx = self.ctx.clone();
+        self.exports_running += 1;
+        self.info = Some("writing…".into());
+        let spawned = std::thread::Builder::new()
+            .name("flexiso-export".into())
+            .spawn(move || {
+                let _ = tx.send(write());
+                if let Some(ctx) = ctx {
+                    ctx.request_repaint();
+                }
+            });
+        if let Err(e) = spawned {
+            self.exports_running -= 1;
+            self.error = Some(format!("cannot start the export: {e}"));
+        }
+    }
+
+    /// Installs the outcomes of finished exports.
+    fn poll_exports(&mut self) {
+        while let Ok(r) = self.export_rx.try_recv() {
+            self.exports_running = self.exports_running.saturating_sub(1);
+            match r {
+                Ok(msg) => self.info = Some(msg),
+                Err(e) => self.error = Some(e),
+            }
+        }
+    }
+
+    /// Waits for the exports in flight (tests).
+    pub fn wait_for_exports(&mut self) {
+        while self.exports_running > 0 {
+            match self.export_rx.recv_timeout(Duration::from_secs(60)) {
+                Ok(r) => {
+                    self.exports_running -= 1;
+                    match r {
+                        Ok(msg) => self.info = Some(msg),
+                        Err(e) => self.error = Some(e),
+                    }
+                }
+                Err(_) => return,
+            }
+        }
     }
 
     fn handle_dialogs(&mut self) {
         while let Ok(d) = self.dialog_rx.try_recv() {
             match d {
                 Dialog::Open(p) => self.open(&p.to_string_lossy()),
-                Dialog::ExportContours(p) => match self.export_contours(&p) {
-                    Ok(n) => self.info = Some(format!("wrote {n} contour(s) to {}", p.display())),
-                    Err(e) => self.error = Some(format!("{e:#}")),
-                },
-                Dialog::TreeJson(p) => match self.export_tree_json(&p) {
-                    Ok(()) => self.info = Some(format!("wrote {}", p.display())),
-                    Err(e) => self.error = Some(format!("{e:#}")),
-                },
+                Dialog::ExportContours(p) => self.start_contour_export(p),
+                Dialog::TreeJson(p) => self.start_tree_export(p),
                 Dialog::Screenshot(p) => self.pending_screenshot = Some(p),
             }
         }
@@ -1054,6 +1166,7 @@ impl eframe::App for FlexisoApp {
             self.accept(r);
         }
         self.handle_dialogs();
+        self.poll_exports();
         self.poll_betti();
         self.selection.poll();
         self.handle_input(ui);

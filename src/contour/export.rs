@@ -4,6 +4,7 @@
 //! The format follows the file's extension.
 
 use super::ContourMesh;
+use std::borrow::Borrow;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use thiserror::Error;
@@ -55,7 +56,7 @@ impl MeshFormat {
 /// parallel to `contours`), in the format of its extension.
 pub fn write_contours(
     path: &Path,
-    contours: &[ContourMesh],
+    contours: &[impl Borrow<ContourMesh>],
     names: &[String],
 ) -> Result<(), ExportError> {
     let shown = || path.display().to_string();
@@ -78,9 +79,9 @@ pub fn write_contours(
 
 /// Binary PLY: vertices with normals, faces with the index of their
 /// contour.
-pub fn write_ply(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()> {
-    let nv: usize = contours.iter().map(|c| c.positions.len()).sum();
-    let nf: usize = contours.iter().map(|c| c.num_triangles()).sum();
+pub fn write_ply(w: &mut impl Write, contours: &[impl Borrow<ContourMesh>]) -> io::Result<()> {
+    let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
+    let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
     write!(
         w,
         "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n\
@@ -89,6 +90,7 @@ pub fn write_ply(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()>
          element face {nf}\nproperty list uchar int vertex_indices\nproperty int contour\nend_header\n"
     )?;
     for c in contours {
+        let c = c.borrow();
         for (p, n) in c.positions.iter().zip(&c.normals) {
             for x in p.iter().chain(n) {
                 w.write_all(&x.to_le_bytes())?;
@@ -97,6 +99,7 @@ pub fn write_ply(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()>
     }
     let mut base = 0u32;
     for (i, c) in contours.iter().enumerate() {
+        let c = c.borrow();
         for t in c.indices.chunks_exact(3) {
             w.write_all(&[3u8])?;
             for &v in t {
@@ -110,10 +113,15 @@ pub fn write_ply(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()>
 }
 
 /// OBJ: one object per contour, positions, normals, 1-based faces.
-pub fn write_obj(w: &mut impl Write, contours: &[ContourMesh], names: &[String]) -> io::Result<()> {
+pub fn write_obj(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+) -> io::Result<()> {
     writeln!(w, "# flexiso contours")?;
     let mut base = 1usize;
     for (i, c) in contours.iter().enumerate() {
+        let c = c.borrow();
         let name = names
             .get(i)
             .cloned()
@@ -135,14 +143,15 @@ pub fn write_obj(w: &mut impl Write, contours: &[ContourMesh], names: &[String])
 }
 
 /// Binary STL: every triangle of every contour with its facet normal.
-pub fn write_stl(w: &mut impl Write, contours: &[ContourMesh]) -> io::Result<()> {
+pub fn write_stl(w: &mut impl Write, contours: &[impl Borrow<ContourMesh>]) -> io::Result<()> {
     let mut header = [0u8; 80];
     let text = b"flexiso contours";
     header[..text.len()].copy_from_slice(text);
     w.write_all(&header)?;
-    let nf: usize = contours.iter().map(|c| c.num_triangles()).sum();
+    let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
     w.write_all(&(nf as u32).to_le_bytes())?;
     for c in contours {
+        let c = c.borrow();
         for t in c.indices.chunks_exact(3) {
             let p = [0, 1, 2].map(|k| c.positions[t[k] as usize]);
             let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
