@@ -408,6 +408,7 @@ fn exports_write_meshes_the_tree_as_json_and_the_3d_view_as_png() {
         let png = dir.path().join("view.png");
         h.state_mut().request_screenshot(png.clone());
         h.run_steps(2);
+        h.state_mut().wait_for_exports();
         assert_eq!(h.state().error(), None);
         let img = image::open(&png).expect("screenshot written").to_rgba8();
         assert!(img.width() > 100 && img.height() > 100);

@@ -1140,15 +1140,15 @@ impl FlexisoApp {
         let Some(path) = self.pending_screenshot.take() else {
             return;
         };
-        let result = rs
+        let image = rs
             .ok_or_else(|| anyhow::anyhow!("no GPU render state"))
-            .and_then(|rs| self.view3d.read_image(rs))
-            .and_then(|img| {
-                img.save(&path)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
-            });
-        match result {
-            Ok(()) => self.info = Some(format!("saved {}", path.display())),
+            .and_then(|rs| self.view3d.read_image(rs));
+        match image {
+            // PNG encoding takes tens of milliseconds: not on this thread.
+            Ok(img) => self.export_in_background(move || match img.save(&path) {
+                Ok(()) => Ok(format!("saved {}", path.display())),
+                Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
+            }),
             Err(e) => self.error = Some(format!("screenshot: {e:#}")),
         }
     }
