@@ -235,6 +235,60 @@ fn moving_the_curve_slider_changes_the_number_of_arcs_drawn() {
     assert_eq!(after, h.state().level().expect("level").num_arcs());
 }
 
+/// A level far away is reached over several frames, a bounded number of
+/// steps each, and ends where it would have in one go.
+#[test]
+fn a_far_level_is_reached_over_several_frames() {
+    let far = |limit: Option<usize>| {
+        let (mut h, _) = explorer();
+        if let Some(l) = limit {
+            h.state_mut().curve_panel_mut().steps_per_frame = l;
+        }
+        let rect = h.state().curve_panel().plot_rect.expect("curve drawn");
+        let (a, b) = (
+            pos2(rect.left() + 0.1 * rect.width(), rect.center().y),
+            pos2(rect.left() + 0.9 * rect.width(), rect.center().y),
+        );
+        let step = |h: &Harness<'_, FlexisoApp>| h.state().level().expect("level").step();
+        let start = step(&h);
+        let mut largest_move = 0;
+        let mut frame = |h: &mut Harness<'_, FlexisoApp>| {
+            let before = step(h);
+            h.run_steps(1);
+            largest_move = largest_move.max(step(h).abs_diff(before));
+        };
+        h.hover_at(a);
+        frame(&mut h);
+        h.drag_at(a);
+        frame(&mut h);
+        for i in 1..=10 {
+            h.hover_at(a + (b - a) * (i as f32 / 10.0));
+            frame(&mut h);
+        }
+        h.drop_at(b);
+        for _ in 0..10_000 {
+            let before = step(&h);
+            frame(&mut h);
+            if step(&h) == before {
+                break;
+            }
+        }
+        let level = h.state().level().expect("level");
+        (start, largest_move, level.step(), level.num_arcs())
+    };
+    let (start, _, end, arcs) = far(None);
+    let (start1, largest_move, end1, arcs1) = far(Some(1));
+    assert_eq!(start, start1);
+    assert!(
+        end > start + 2,
+        "the drag asks for several steps: {start} -> {end}"
+    );
+    // One step per pass; egui may run a frame in two passes.
+    assert!(largest_move <= 2, "{largest_move} steps in one frame");
+    assert!(largest_move < end - start, "not reached in one frame");
+    assert_eq!((end1, arcs1), (end, arcs), "the same level in the end");
+}
+
 #[test]
 fn opening_a_bad_file_shows_an_error_and_keeps_the_old_dataset() {
     let (mut h, _) = explorer();

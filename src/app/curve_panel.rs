@@ -8,11 +8,32 @@ use egui_plot::{GridMark, Line, Plot, PlotPoints, Points, VLine};
 use crate::simplify::{Simplification, SimplifiedTree};
 
 /// The curve panel's state.
-#[derive(Default)]
 pub struct CurvePanel {
     /// The plot's screen rect in the last frame (tests drag on it).
     pub plot_rect: Option<egui::Rect>,
+    /// The step the user asked for, when not reached yet (see
+    /// [`STEPS_PER_FRAME`]), and the simplification it is a step of.
+    target: Option<(usize, usize)>,
+    /// Pruning steps replayed per frame at most ([`STEPS_PER_FRAME`]).
+    pub steps_per_frame: usize,
 }
+
+impl Default for CurvePanel {
+    fn default() -> Self {
+        CurvePanel {
+            plot_rect: None,
+            target: None,
+            steps_per_frame: STEPS_PER_FRAME,
+        }
+    }
+}
+
+/// Pruning steps replayed per frame at most. Any level change costs time
+/// proportional to the steps in between (well under a millisecond on the
+/// real volumes), but a tree of millions of arcs can ask for millions of
+/// steps in one drag (0.4 s): the level then moves there over several
+/// frames instead of freezing one.
+pub const STEPS_PER_FRAME: usize = 50_000;
 
 /// The curve of `sim` as the panel draws it: log10 feature size against
 /// log10 arcs, decimated to [`CURVE_RESOLUTION`] (computed with the
@@ -97,6 +118,26 @@ fn decade_grid(input: egui_plot::GridInput) -> Vec<GridMark> {
 }
 
 impl CurvePanel {
+    /// Moves `level` towards step `target` by at most `steps_per_frame`
+    /// steps, asking for another frame until it is there.
+    fn approach(&mut self, ui: &egui::Ui, level: &mut SimplifiedTree, target: usize) {
+        let now = level.step();
+        let next = if target > now {
+            target.min(now + self.steps_per_frame.max(1))
+        } else {
+            target.max(now.saturating_sub(self.steps_per_frame.max(1)))
+        };
+        level.set_step(next);
+        // Stop there, or where the sequence ends.
+        if level.step() == target || level.step() == now {
+            self.target = None;
+        } else {
+            let sim = std::sync::Arc::as_ptr(level.simplification()) as usize;
+            self.target = Some((target, sim));
+            ui.ctx().request_repaint();
+        }
+    }
+
     /// Draws the curve and the level controls; moves `level`. Returns true
     /// when the level changed.
     pub fn ui(
@@ -107,8 +148,15 @@ impl CurvePanel {
     ) -> bool {
         let sim = std::sync::Arc::clone(level.simplification());
         let before = level.step();
+        // The level still to reach, unless it is of another
+        // simplification (another measure or volume arrived meanwhile).
+        let pending = match self.target.take() {
+            Some((t, of)) if of == std::sync::Arc::as_ptr(&sim) as usize => Some(t),
+            _ => None,
+        };
         let current = level.feature_size();
         let mut target_fs: Option<f64> = None;
+        let mut target_step: Option<usize> = None;
 
         ui.horizontal(|ui| {
             let mut arcs = level.num_arcs();
@@ -119,7 +167,7 @@ impl CurvePanel {
                     .text("arcs shown"),
             );
             if r.changed() {
-                level.set_level(arcs);
+                target_step = Some(sim.steps_for_arcs(arcs));
             }
             ui.label(format!(
                 "feature size {}",
@@ -164,7 +212,11 @@ impl CurvePanel {
             });
         self.plot_rect = Some(resp.response.rect);
         if let Some(fs) = target_fs {
-            level.set_feature_size(fs);
+            target_step = Some(sim.steps_for_feature_size(fs));
+        }
+        // One move per frame, towards what was asked last.
+        if let Some(t) = target_step.or(pending) {
+            self.approach(ui, level, t);
         }
         level.step() != before
     }

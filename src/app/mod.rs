@@ -360,6 +360,11 @@ impl FlexisoApp {
         &self.curve_panel
     }
 
+    /// The curve panel, to change its settings (tests).
+    pub fn curve_panel_mut(&mut self) -> &mut CurvePanel {
+        &mut self.curve_panel
+    }
+
     /// The 3D view.
     pub fn view3d(&self) -> &View3d {
         &self.view3d
