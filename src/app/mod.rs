@@ -677,11 +677,15 @@ impl FlexisoApp {
     /// Installs the outcomes of finished exports.
     fn poll_exports(&mut self) {
         while let Ok(r) = self.export_rx.try_recv() {
-            self.exports_running = self.exports_running.saturating_sub(1);
-            match r {
-                Ok(msg) => self.info = Some(msg),
-                Err(e) => self.error = Some(e),
-            }
+            self.export_done(r);
+        }
+    }
+
+    fn export_done(&mut self, outcome: Result<String, String>) {
+        self.exports_running = self.exports_running.saturating_sub(1);
+        match outcome {
+            Ok(msg) => self.info = Some(msg),
+            Err(e) => self.error = Some(e),
         }
     }
 
@@ -689,13 +693,7 @@ impl FlexisoApp {
     pub fn wait_for_exports(&mut self) {
         while self.exports_running > 0 {
             match self.export_rx.recv_timeout(Duration::from_secs(60)) {
-                Ok(r) => {
-                    self.exports_running -= 1;
-                    match r {
-                        Ok(msg) => self.info = Some(msg),
-                        Err(e) => self.error = Some(e),
-                    }
-                }
+                Ok(r) => self.export_done(r),
                 Err(_) => return,
             }
         }

@@ -581,14 +581,7 @@ pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
 pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![[0f32; 3]; positions.len()];
     for tri in indices.chunks_exact(3) {
-        let [a, b, c] = [0, 1, 2].map(|i| positions[tri[i] as usize]);
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
+        let n = area_normal(positions, tri);
         for &i in tri {
             let s = &mut acc[i as usize];
             s[0] += n[0];
@@ -598,6 +591,20 @@ pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> 
     }
     normalize(&mut acc);
     acc
+}
+
+/// Twice the area times the unit normal of triangle `tri` (counter-
+/// clockwise), the weight of a face in an area-weighted vertex normal.
+#[inline]
+pub(crate) fn area_normal(positions: &[[f32; 3]], tri: &[u32]) -> [f32; 3] {
+    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
 }
 
 /// Scales each normal to unit length (a zero or non-finite one becomes +z).

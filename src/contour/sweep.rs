@@ -38,7 +38,7 @@
 //! cube masks), 20 bytes per contour vertex (downhill gradient, root and
 //! label) and two dense tables of one plane per worker.
 
-use super::follow::{TetTables, downhill, normalize, prefer_gradient};
+use super::follow::{TetTables, area_normal, downhill, normalize, prefer_gradient};
 use super::{ContourMesh, Isovalue, PathSeed};
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
@@ -565,14 +565,7 @@ fn add_triangle(
     first: u32,
     tri: &[u32],
 ) {
-    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    let n = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
+    let n = area_normal(positions, tri);
     for &i in tri {
         let s = &mut normals[(i - first) as usize];
         s[0] += n[0];
