@@ -9,7 +9,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flexiso::app::FlexisoApp;
 use flexiso::field::synthetic::Synthetic;
-use flexiso::simplify::SimpArcId;
+use flexiso::simplify::SimplifiedArcId;
 
 fn gpu_available() -> bool {
     match flexiso::render::Gpu::new() {
@@ -73,11 +73,11 @@ fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
 
 /// The live arc spanning the widest range of values, and where the tree
 /// panel drew its midpoint.
-fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimpArcId, Pos2) {
+fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
     let app = h.state();
     let level = app.level().expect("level");
     let sim = level.simplification();
-    let span = |a: SimpArcId| {
+    let span = |a: SimplifiedArcId| {
         let la = level.arc(a);
         sim.node_value(la.upper) - sim.node_value(la.lower)
     };
@@ -327,7 +327,7 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
         let sim = level.simplification();
         let mut found = None;
         for a in level.arcs() {
-            let ups: Vec<SimpArcId> = level
+            let ups: Vec<SimplifiedArcId> = level
                 .arcs()
                 .filter(|b| b.lower == a.upper)
                 .map(|b| b.id)
@@ -362,7 +362,7 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
         "one contour per arc above the join: {:?}",
         sel.iter().map(|c| (c.superarc, c.h)).collect::<Vec<_>>()
     );
-    let mut on: Vec<SimpArcId> = sel
+    let mut on: Vec<SimplifiedArcId> = sel
         .iter()
         .map(|c| {
             app.level()

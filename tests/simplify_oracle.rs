@@ -19,7 +19,7 @@ use flexiso::field::{ScalarField, Values};
 use flexiso::mesh::Mesh;
 use flexiso::progress::Progress;
 use flexiso::simplify::{
-    CollapsedTree, Measure, SimpArcId, SimpNodeId, Simplification, SimplifiedTree,
+    CollapsedTree, Measure, Simplification, SimplifiedArcId, SimplifiedNodeId, SimplifiedTree,
 };
 use flexiso::tree::ContourTree;
 use proptest::prelude::*;
@@ -229,7 +229,7 @@ fn snapshot(level: &SimplifiedTree) -> (Vec<u32>, Vec<(u32, u32, u32)>) {
     arcs.sort_unstable();
     let nodes: Vec<(u32, u32, u32)> = (0..level.simplification().num_nodes() as u32)
         .map(|v| {
-            let (u, d) = level.degree(SimpNodeId(v));
+            let (u, d) = level.degree(SimplifiedNodeId(v));
             (v, u, d)
         })
         .collect();
@@ -288,10 +288,13 @@ fn check_valid(level: &SimplifiedTree, tree: &ContourTree, field: &ScalarField) 
         assert_eq!(merges + 1, live.len(), "connected");
     }
     for v in 0..n as u32 {
-        let d = level.degree(SimpNodeId(v));
+        let d = level.degree(SimplifiedNodeId(v));
         assert_eq!(d, deg[v as usize], "degrees of node {v}");
         assert_ne!(d, (1, 1), "node {v} should have been reduced");
-        assert_eq!(live.binary_search(&SimpNodeId(v)).is_ok(), d != (0, 0));
+        assert_eq!(
+            live.binary_search(&SimplifiedNodeId(v)).is_ok(),
+            d != (0, 0)
+        );
     }
 }
 
@@ -472,5 +475,5 @@ fn two_bumps_on_a_line_prune_the_smaller() {
     assert!(!first.lower_leaf);
     assert_eq!(sim.node_value(sim.upper(first.pruned)), 3.0);
     assert_eq!(first.cost, 2.0);
-    let _ = SimpArcId(0);
+    let _ = SimplifiedArcId(0);
 }

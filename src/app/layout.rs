@@ -15,7 +15,7 @@
 //! fixed order, so the drawing is compact at every level and the relative
 //! order of nodes never changes.
 
-use crate::simplify::{SimpArcId, SimpNodeId, Simplification, SimplifiedTree};
+use crate::simplify::{Simplification, SimplifiedArcId, SimplifiedNodeId, SimplifiedTree};
 
 const NONE: u32 = u32::MAX;
 
@@ -55,7 +55,7 @@ impl TreeLayout {
         // Per arc id: the arc made from it by a reduction.
         let mut parent = vec![NONE; ids];
         for d in sim.base_arcs()..ids {
-            if let Some((e1, e2)) = sim.reduced_from(SimpArcId(d as u32)) {
+            if let Some((e1, e2)) = sim.reduced_from(SimplifiedArcId(d as u32)) {
                 parent[e1.0 as usize] = d as u32;
                 parent[e2.0 as usize] = d as u32;
             }
@@ -77,7 +77,7 @@ impl TreeLayout {
         }
         let mut node_branch = vec![NONE; nodes];
         for (d, &o) in owner.iter().enumerate().skip(sim.base_arcs()) {
-            if let Some((e1, _)) = sim.reduced_from(SimpArcId(d as u32)) {
+            if let Some((e1, _)) = sim.reduced_from(SimplifiedArcId(d as u32)) {
                 node_branch[sim.lower(e1).0 as usize] = o;
             }
         }
@@ -90,7 +90,7 @@ impl TreeLayout {
             node_branch[leaf.0 as usize] = k as u32;
         }
         for &a in &roots {
-            for n in [sim.upper(SimpArcId(a)), sim.lower(SimpArcId(a))] {
+            for n in [sim.upper(SimplifiedArcId(a)), sim.lower(SimplifiedArcId(a))] {
                 if node_branch[n.0 as usize] == NONE {
                     node_branch[n.0 as usize] = root_of[a as usize];
                 }
@@ -167,7 +167,7 @@ impl TreeLayout {
     /// shows.
     pub fn live_columns(&self, level: &SimplifiedTree, columns: &mut Vec<f32>) {
         let nodes = level.nodes();
-        let place = |n: SimpNodeId| {
+        let place = |n: SimplifiedNodeId| {
             let b = self.node_branch[n.0 as usize];
             self.position.get(b as usize).copied().unwrap_or(NONE)
         };
@@ -207,7 +207,7 @@ impl TreeLayout {
     }
 
     /// The branch a node lies on.
-    pub fn branch(&self, node: SimpNodeId) -> u32 {
+    pub fn branch(&self, node: SimplifiedNodeId) -> u32 {
         self.node_branch[node.0 as usize]
     }
 }

@@ -492,7 +492,7 @@ impl FlexisoApp {
 
     /// Selects the contour of the live arc `arc` (tests; the tree panel
     /// does the same on a click).
-    pub fn select_arc(&mut self, arc: crate::simplify::SimpArcId, replace: bool) {
+    pub fn select_arc(&mut self, arc: crate::simplify::SimplifiedArcId, replace: bool) {
         if let (Some(ds), Some(level)) = (&self.dataset, &self.level) {
             TreePanel::select_arc(ds, level, &mut self.selection, arc, self.global_h, replace);
         }

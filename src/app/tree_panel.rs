@@ -14,7 +14,7 @@
 use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2, pos2, vec2};
 
 use crate::contour::{Isovalue, path_seed_in_chain};
-use crate::simplify::{SimpArcId, SimplifiedTree};
+use crate::simplify::{SimplifiedArcId, SimplifiedTree};
 
 use super::pipeline::Dataset;
 use super::selection::Selection;
@@ -40,7 +40,7 @@ pub struct Drawn {
     /// The panel's rect.
     pub rect: Option<Rect>,
     /// Live arcs drawn, with the screen midpoint of each.
-    pub arcs: Vec<(SimpArcId, Pos2)>,
+    pub arcs: Vec<(SimplifiedArcId, Pos2)>,
     /// Screen height of each drawn arc (parallel to `arcs`).
     pub arc_heights: Vec<f32>,
     /// Screen ends (upper, lower) of each drawn arc (parallel to `arcs`).
@@ -64,7 +64,7 @@ pub struct TreePanel {
     /// What the last frame drew.
     pub drawn: Drawn,
     /// The arc under the pointer.
-    pub hovered: Option<SimpArcId>,
+    pub hovered: Option<SimplifiedArcId>,
     /// Betti numbers of the superarcs' contours, once computed.
     pub betti: Option<std::sync::Arc<crate::measure::betti::ContourTopology>>,
 }
@@ -198,19 +198,19 @@ impl TreePanel {
             pan: self.pan,
         };
         let sim = level.simplification();
-        let node_pos = |n: crate::simplify::SimpNodeId| -> Pos2 {
+        let node_pos = |n: crate::simplify::SimplifiedNodeId| -> Pos2 {
             let x = self.columns.get(n.0 as usize).copied().unwrap_or(0.5);
             tf.screen(if x.is_finite() { x } else { 0.5 }, sim.node_value(n))
         };
 
         // Arcs: segments and hit testing.
         let pointer = response.hover_pos();
-        let mut segs: Vec<(SimpArcId, Pos2, Pos2)> = Vec::with_capacity(level.num_arcs());
+        let mut segs: Vec<(SimplifiedArcId, Pos2, Pos2)> = Vec::with_capacity(level.num_arcs());
         for a in level.arcs() {
             segs.push((a.id, node_pos(a.upper), node_pos(a.lower)));
         }
         segs.sort_by_key(|s| s.0);
-        let nearest = |p: Pos2| -> Option<SimpArcId> {
+        let nearest = |p: Pos2| -> Option<SimplifiedArcId> {
             segs.iter()
                 .map(|&(id, a, b)| (segment_distance(p, a, b), id))
                 .filter(|(d, _)| *d <= 6.0)
@@ -220,7 +220,7 @@ impl TreePanel {
         self.hovered = pointer.and_then(nearest);
 
         // Markers: each selected contour on the live arc holding it.
-        let mut markers: Vec<(u64, Pos2, Color32, SimpArcId)> = Vec::new();
+        let mut markers: Vec<(u64, Pos2, Color32, SimplifiedArcId)> = Vec::new();
         for c in &sel.contours {
             if let Some(a) = level.live_arc_of(c.superarc) {
                 let la = level.arc(a);
@@ -356,7 +356,8 @@ impl TreePanel {
             ISO_COLOUR,
         );
 
-        let selected_arcs: Vec<(SimpArcId, Color32)> = markers.iter().map(|m| (m.3, m.2)).collect();
+        let selected_arcs: Vec<(SimplifiedArcId, Color32)> =
+            markers.iter().map(|m| (m.3, m.2)).collect();
         for &(id, a, b) in &segs {
             let (width, colour) = if let Some(&(_, c)) = selected_arcs.iter().find(|s| s.0 == id) {
                 (3.0, c)
@@ -464,7 +465,7 @@ impl TreePanel {
         ds: &Dataset,
         level: &SimplifiedTree,
         sel: &mut Selection,
-        arc: SimpArcId,
+        arc: SimplifiedArcId,
         global_h: f64,
         replace: bool,
     ) {
@@ -499,7 +500,7 @@ impl TreePanel {
             return;
         };
         // The dragged contour first, so it keeps following the pointer.
-        let mut starts: Vec<SimpArcId> = Vec::new();
+        let mut starts: Vec<SimplifiedArcId> = Vec::new();
         let lead = sel.get(id).and_then(|c| level.live_arc_of(c.superarc));
         starts.extend(lead);
         for c in sel
@@ -512,7 +513,7 @@ impl TreePanel {
             }
         }
         let sim = level.simplification();
-        let mut arcs: Vec<SimpArcId> = Vec::new();
+        let mut arcs: Vec<SimplifiedArcId> = Vec::new();
         for s in starts {
             for a in level_set_arcs(level, s, v) {
                 if !arcs.contains(&a) {
@@ -540,25 +541,29 @@ impl TreePanel {
 /// following it monotonically through the nodes in between (all arcs
 /// above an upper node, all below a lower one); an arc ending at an
 /// extremum keeps the contour at its end.
-pub fn level_set_arcs(level: &SimplifiedTree, start: SimpArcId, v: f64) -> Vec<SimpArcId> {
+pub fn level_set_arcs(
+    level: &SimplifiedTree,
+    start: SimplifiedArcId,
+    v: f64,
+) -> Vec<SimplifiedArcId> {
     let sim = level.simplification();
     let mut out = Vec::new();
     let mut stack = vec![start];
     while let Some(a) = stack.pop() {
         let (u, l) = (sim.upper(a), sim.lower(a));
         let (top, bottom) = (sim.node_value(u), sim.node_value(l));
-        let next: Vec<SimpArcId> = if v >= top {
+        let next: Vec<SimplifiedArcId> = if v >= top {
             level
                 .arc_ids()
                 .iter()
-                .map(|&b| SimpArcId(b))
+                .map(|&b| SimplifiedArcId(b))
                 .filter(|&b| sim.lower(b) == u)
                 .collect()
         } else if v < bottom {
             level
                 .arc_ids()
                 .iter()
-                .map(|&b| SimpArcId(b))
+                .map(|&b| SimplifiedArcId(b))
                 .filter(|&b| sim.upper(b) == l)
                 .collect()
         } else {

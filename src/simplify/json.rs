@@ -17,7 +17,7 @@
 //! feature size, the simplest level that has it (the corners of the
 //! staircase), from the full tree to the last level.
 
-use super::{CollapsedTree, SimpArcId, SimplifiedTree};
+use super::{CollapsedTree, SimplifiedArcId, SimplifiedTree};
 use crate::tree::{ArcId, ContourTree};
 use serde_json::{Value, json};
 
@@ -78,11 +78,17 @@ pub fn simplified_tree_json(level: &SimplifiedTree, tree: &ContourTree) -> Value
         })
         .collect();
     let mut arc_ids = level.arc_ids().to_vec();
-    arc_ids.sort_unstable_by_key(|&a| (sim.lower(SimpArcId(a)), sim.upper(SimpArcId(a)), a));
+    arc_ids.sort_unstable_by_key(|&a| {
+        (
+            sim.lower(SimplifiedArcId(a)),
+            sim.upper(SimplifiedArcId(a)),
+            a,
+        )
+    });
     let arcs: Vec<Value> = arc_ids
         .iter()
         .map(|&a| {
-            let arc = level.arc(SimpArcId(a));
+            let arc = level.arc(SimplifiedArcId(a));
             json!({
                 "upper": arc.upper_vertex,
                 "lower": arc.lower_vertex,

@@ -45,18 +45,18 @@ use std::sync::Arc;
 /// An arc of the simplification: an arc of the collapsed tree (ids below
 /// [`Simplification::base_arcs`]) or one made by vertex reduction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SimpArcId(pub u32);
+pub struct SimplifiedArcId(pub u32);
 
 /// A node of the collapsed tree (nodes are never created by simplification).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SimpNodeId(pub u32);
+pub struct SimplifiedNodeId(pub u32);
 
 /// One step of the pruning sequence: a leaf prune, and the vertex
 /// reduction it allowed, if any.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Step {
     /// The leaf arc pruned.
-    pub pruned: SimpArcId,
+    pub pruned: SimplifiedArcId,
     /// True when the leaf was a lower leaf (a minimum levelled up to the
     /// arc's upper node), false for an upper leaf.
     pub lower_leaf: bool,
@@ -64,7 +64,7 @@ pub struct Step {
     pub cost: f64,
     /// The arc made by the reduction that followed (its parts are
     /// [`Simplification::reduced_from`]), if any.
-    pub reduced: Option<SimpArcId>,
+    pub reduced: Option<SimplifiedArcId>,
 }
 
 /// One point of the simplification curve (paper §5): after some steps, the
@@ -272,7 +272,7 @@ impl Simplification {
                 enqueue(
                     &mut heap, &n_up, &n_down, d, &upper, &lower, &up_cost, &down_cost,
                 );
-                reduced = Some(SimpArcId(d));
+                reduced = Some(SimplifiedArcId(d));
             } else if degree(&n_up, &n_down, s) == 1 {
                 // A node with arcs in one direction only (a collapsed
                 // plateau) has become a leaf.
@@ -282,7 +282,7 @@ impl Simplification {
                 );
             }
             steps.push(Step {
-                pruned: SimpArcId(a),
+                pruned: SimplifiedArcId(a),
                 lower_leaf,
                 cost,
                 reduced,
@@ -395,37 +395,37 @@ impl Simplification {
     }
 
     /// Upper node of an arc.
-    pub fn upper(&self, a: SimpArcId) -> SimpNodeId {
-        SimpNodeId(self.upper[a.0 as usize])
+    pub fn upper(&self, a: SimplifiedArcId) -> SimplifiedNodeId {
+        SimplifiedNodeId(self.upper[a.0 as usize])
     }
 
     /// Lower node of an arc.
-    pub fn lower(&self, a: SimpArcId) -> SimpNodeId {
-        SimpNodeId(self.lower[a.0 as usize])
+    pub fn lower(&self, a: SimplifiedArcId) -> SimplifiedNodeId {
+        SimplifiedNodeId(self.lower[a.0 as usize])
     }
 
     /// up(e): the cost of pruning the arc as a lower leaf.
-    pub fn up_cost(&self, a: SimpArcId) -> f64 {
+    pub fn up_cost(&self, a: SimplifiedArcId) -> f64 {
         self.up_cost[a.0 as usize]
     }
 
     /// down(e): the cost of pruning the arc as an upper leaf.
-    pub fn down_cost(&self, a: SimpArcId) -> f64 {
+    pub fn down_cost(&self, a: SimplifiedArcId) -> f64 {
         self.down_cost[a.0 as usize]
     }
 
     /// The two arcs (above, below) a reduced arc was made from, or `None`
     /// for an arc of the collapsed tree.
-    pub fn reduced_from(&self, a: SimpArcId) -> Option<(SimpArcId, SimpArcId)> {
+    pub fn reduced_from(&self, a: SimplifiedArcId) -> Option<(SimplifiedArcId, SimplifiedArcId)> {
         let i = (a.0 as usize).checked_sub(self.base_arcs)?;
         let (e1, e2) = self.parts[i];
-        Some((SimpArcId(e1), SimpArcId(e2)))
+        Some((SimplifiedArcId(e1), SimplifiedArcId(e2)))
     }
 
     /// The original superarcs (of the perturbed tree) an arc stands for: a
     /// monotone path, ascending in value, so the one holding isovalue `h`
     /// is found by binary search ([`Simplification::superarc_at`]).
-    pub fn chain(&self, a: SimpArcId) -> &[ArcId] {
+    pub fn chain(&self, a: SimplifiedArcId) -> &[ArcId] {
         let s = self.chain_start[a.0 as usize] as usize;
         &self.chain[s..s + self.chain_len[a.0 as usize] as usize]
     }
@@ -436,7 +436,7 @@ impl Simplification {
     /// `None` when `h` is outside the arc's range.
     pub fn superarc_at(
         &self,
-        a: SimpArcId,
+        a: SimplifiedArcId,
         h: f64,
         tree: &ContourTree,
         field: &ScalarField,
@@ -450,12 +450,12 @@ impl Simplification {
     }
 
     /// The representative mesh vertex of a node.
-    pub fn node_vertex(&self, v: SimpNodeId) -> u32 {
+    pub fn node_vertex(&self, v: SimplifiedNodeId) -> u32 {
         self.node_vertex[v.0 as usize]
     }
 
     /// The value of a node.
-    pub fn node_value(&self, v: SimpNodeId) -> f64 {
+    pub fn node_value(&self, v: SimplifiedNodeId) -> f64 {
         self.node_value[v.0 as usize]
     }
 
@@ -539,11 +539,11 @@ pub struct SimplifiedTree {
 #[derive(Clone, Copy, Debug)]
 pub struct LevelArc<'a> {
     /// The arc.
-    pub id: SimpArcId,
+    pub id: SimplifiedArcId,
     /// Its upper node.
-    pub upper: SimpNodeId,
+    pub upper: SimplifiedNodeId,
     /// Its lower node.
-    pub lower: SimpNodeId,
+    pub lower: SimplifiedNodeId,
     /// Mesh vertex of the upper node.
     pub upper_vertex: u32,
     /// Mesh vertex of the lower node.
@@ -649,7 +649,7 @@ impl SimplifiedTree {
 
     /// The live arcs, in no particular order (sort by id for determinism).
     pub fn arcs(&self) -> impl ExactSizeIterator<Item = LevelArc<'_>> + '_ {
-        self.live_arcs.iter().map(|&a| self.arc(SimpArcId(a)))
+        self.live_arcs.iter().map(|&a| self.arc(SimplifiedArcId(a)))
     }
 
     /// The live arc ids, in no particular order.
@@ -659,7 +659,7 @@ impl SimplifiedTree {
 
     /// The live nodes (the ends of live arcs), sorted; O(a log a) for a
     /// live arcs, computed on each call.
-    pub fn nodes(&self) -> Vec<SimpNodeId> {
+    pub fn nodes(&self) -> Vec<SimplifiedNodeId> {
         let mut v: Vec<u32> = self
             .live_arcs
             .iter()
@@ -667,7 +667,7 @@ impl SimplifiedTree {
             .collect();
         v.sort_unstable();
         v.dedup();
-        v.into_iter().map(SimpNodeId).collect()
+        v.into_iter().map(SimplifiedNodeId).collect()
     }
 
     /// The live arc standing for original superarc `s` at this level (the
@@ -676,11 +676,11 @@ impl SimplifiedTree {
     /// markers follow their contours without a pass over the tree. None
     /// when `s` has zero height (collapsed into a node) or lies on a pruned
     /// branch.
-    pub fn live_arc_of(&self, s: ArcId) -> Option<SimpArcId> {
+    pub fn live_arc_of(&self, s: ArcId) -> Option<SimplifiedArcId> {
         let mut a = *self.sim.superarc_base.get(s.0 as usize)?;
         while a != NONE {
-            if self.is_live(SimpArcId(a)) {
-                return Some(SimpArcId(a));
+            if self.is_live(SimplifiedArcId(a)) {
+                return Some(SimplifiedArcId(a));
             }
             // Dead: pruned (no successor), or reduced into an arc made at
             // an applied step (an arc ends at most once).
@@ -690,12 +690,12 @@ impl SimplifiedTree {
     }
 
     /// True when the arc is live at this level.
-    pub fn is_live(&self, a: SimpArcId) -> bool {
+    pub fn is_live(&self, a: SimplifiedArcId) -> bool {
         self.arc_pos[a.0 as usize] != NONE
     }
 
     /// Any arc (live or not) by id.
-    pub fn arc(&self, a: SimpArcId) -> LevelArc<'_> {
+    pub fn arc(&self, a: SimplifiedArcId) -> LevelArc<'_> {
         let s = &self.sim;
         let (u, l) = (s.upper(a), s.lower(a));
         LevelArc {
@@ -711,7 +711,7 @@ impl SimplifiedTree {
     }
 
     /// Live arcs (up, down) at a node; (0, 0) when the node is gone.
-    pub fn degree(&self, v: SimpNodeId) -> (u32, u32) {
+    pub fn degree(&self, v: SimplifiedNodeId) -> (u32, u32) {
         self.degree[v.0 as usize]
     }
 
