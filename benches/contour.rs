@@ -15,13 +15,11 @@
 #![allow(missing_docs)]
 
 use criterion::{Criterion, Throughput, criterion_group};
-use flexiso::contour::{
-    ContourFollower, Isovalue, PathSeed, PathSeeds, all_contours, all_contours_by_following,
-    global::spanning_arcs,
-};
-use flexiso::field::ScalarField;
+use flexiso::contour::oracle::all_contours_by_following;
+use flexiso::contour::{ContourFollower, PathSeed, PathSeeds, all_contours, global::spanning_arcs};
 use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::field::synthetic::Synthetic;
+use flexiso::field::{Isovalue, ScalarField};
 use flexiso::progress::Progress;
 use flexiso::tree::ContourTree;
 use std::hint::black_box;

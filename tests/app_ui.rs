@@ -11,25 +11,13 @@ use flexiso::app::FlexisoApp;
 use flexiso::field::synthetic::Synthetic;
 use flexiso::simplify::SimplifiedArcId;
 
-fn gpu_available() -> bool {
-    match flexiso::render::Gpu::new() {
-        Ok(_) => true,
-        Err(e) => {
-            assert!(
-                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
-                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
-            );
-            eprintln!("no adapter ({e}): the 3D view is not rendered");
-            false
-        }
-    }
-}
+mod common;
 
 /// The explorer on a small synthetic volume, pipeline already run, in a
 /// 1200×800 window; the second value says whether the 3D view renders.
 fn explorer() -> (Harness<'static, FlexisoApp>, bool) {
     let field = Synthetic::cube(40).generate();
-    let gpu = gpu_available();
+    let gpu = common::gpu().is_some();
     let builder = Harness::builder()
         .with_size(egui::vec2(1200.0, 800.0))
         .with_pixels_per_point(1.0);
@@ -406,7 +394,7 @@ fn all_contours_at_h_extracts_every_component_in_the_background() {
     let expected = flexiso::contour::all_contours(
         &tree,
         &field,
-        flexiso::contour::Isovalue::new(app.global_h()),
+        flexiso::field::Isovalue::new(app.global_h()),
     )
     .iter()
     .filter(|m| !m.indices.is_empty())

@@ -6,9 +6,9 @@
 
 mod common;
 
-use flexiso::contour::{
-    Isovalue, MeshTopology, all_contours, all_contours_by_following, marching_tetrahedra,
-};
+use flexiso::contour::oracle::{all_contours_by_following, marching_tetrahedra};
+use flexiso::contour::{MeshTopology, all_contours};
+use flexiso::field::Isovalue;
 use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::measure::betti::ContourTopology;
 use flexiso::progress::Progress;

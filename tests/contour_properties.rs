@@ -2,12 +2,12 @@
 //! extracted contour, the tree's Betti prediction, and a plain
 //! marching-tetrahedra pass over the whole volume.
 
+use flexiso::contour::oracle::{all_contours_by_following, marching_tetrahedra};
 use flexiso::contour::{
-    ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed, PathSeeds, all_contours,
-    all_contours_by_following, contours_through, marching_tetrahedra, path_seed,
-    path_seed_in_chain,
+    ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, all_contours,
+    contours_through, path_seed, path_seed_in_chain,
 };
-use flexiso::field::{ScalarField, Values};
+use flexiso::field::{Isovalue, ScalarField, Values};
 use flexiso::measure::betti::ContourTopology;
 use flexiso::progress::Progress;
 use flexiso::tree::{ArcId, ContourTree};

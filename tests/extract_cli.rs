@@ -3,23 +3,10 @@
 //! arc or a simplified tree's contours, and refuses bad requests with exit
 //! code 2 and a message that says what to do.
 
+mod common;
+
+use common::flexiso;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn flexiso(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_flexiso"))
-        .args(args)
-        .output()
-        .expect("run flexiso")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// One row of the printout's table.
 #[derive(Debug)]
@@ -52,12 +39,8 @@ fn rows(out: &str) -> Vec<Row> {
 
 fn extract(args: &[&str]) -> (String, Vec<Row>) {
     let o = flexiso(args);
-    assert!(
-        o.status.success(),
-        "flexiso {args:?} failed: {}",
-        stderr(&o)
-    );
-    let out = stdout(&o);
+    assert!(o.success(), "flexiso {args:?} failed: {}", o.stderr);
+    let out = o.stdout.clone();
     let r = rows(&out);
     (out, r)
 }
@@ -212,11 +195,11 @@ fn bad_requests_exit_with_code_2_and_say_why() {
     ];
     for (args, message) in cases {
         let o = flexiso(&args);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert_eq!(o.code, 2, "{args:?}: {}", o.stderr);
         assert!(
-            stderr(&o).contains(message),
+            o.stderr.contains(message),
             "{args:?}: expected '{message}' in: {}",
-            stderr(&o)
+            o.stderr
         );
     }
     assert!(!bad.exists(), "nothing written on error");
@@ -232,7 +215,7 @@ fn tree_json_has_betti_numbers_per_arc() {
         "--json",
         json_path.to_str().expect("utf-8"),
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.success(), "{}", o.stderr);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json_path).expect("json")).expect("parse");
     let arcs = json["arcs"].as_array().expect("arcs");

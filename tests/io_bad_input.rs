@@ -3,8 +3,8 @@
 //! file cannot back.
 #![allow(clippy::unwrap_used)]
 
-mod io_common;
-use io_common::*;
+mod common;
+use common::formats::*;
 
 use flexiso::field::io::{NanPolicy, RawLayout, ReadError, ReadOptions, read_volume};
 use flexiso::field::{FieldError, Values};

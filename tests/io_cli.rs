@@ -1,13 +1,13 @@
 //! The input options every subcommand shares, and `flexiso info`.
 #![allow(clippy::unwrap_used)]
 
-mod io_common;
-use io_common::*;
+mod common;
+use common::formats::*;
 
 use clap::Parser;
+use common::{Run, flexiso};
 use flexiso::cli::input::{Endian, InputArgs, default_input};
 use flexiso::field::io::NanPolicy;
-use std::process::Command;
 
 #[derive(Parser)]
 struct Cli {
@@ -69,21 +69,13 @@ fn raw_file_loads_through_input_args() {
     assert_eq!(as_f64(a.load().unwrap().field.values()), vals);
 }
 
-fn flexiso(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_flexiso"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn info_prints_format_dims_type_range_histogram_and_memory() {
-    let (code, out, err) = flexiso(&["info", &format!("{DATA}/neghip.nrrd")]);
+    let Some(neghip) = common::dataset("neghip.nrrd") else {
+        return;
+    };
+    let run = flexiso(&["info", neghip.to_str().unwrap()]);
+    let (code, out, err) = (run.code, run.stdout, run.stderr);
     assert_eq!(code, 0, "{err}");
     for want in [
         "format:    NRRD (gzip)",
@@ -100,7 +92,12 @@ fn info_prints_format_dims_type_range_histogram_and_memory() {
     }
     let bars = out.lines().filter(|l| l.starts_with("  [")).count();
     assert_eq!(bars, 10);
-    let (code, out, _) = flexiso(&["info", "synthetic:8", "--bins", "4"]);
+}
+
+#[test]
+fn info_on_a_float_field_has_no_distinct_count_and_takes_bins() {
+    let run = flexiso(&["info", "synthetic:8", "--bins", "4"]);
+    let (code, out) = (run.code, run.stdout);
     assert_eq!(code, 0);
     assert!(
         out.contains("float32") && !out.contains("distinct"),
@@ -117,7 +114,12 @@ fn info_on_bad_input_exits_2_with_one_line() {
         "bad.nrrd",
         b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n123",
     );
-    let (code, out, err) = flexiso(&["info", p.to_str().unwrap()]);
+    let Run {
+        code,
+        stdout: out,
+        stderr: err,
+        ..
+    } = flexiso(&["info", p.to_str().unwrap()]);
     assert_eq!(code, 2);
     assert!(out.is_empty());
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -125,7 +127,9 @@ fn info_on_bad_input_exits_2_with_one_line() {
         err.starts_with("error: ") && err.contains("bad.nrrd") && err.contains("truncated"),
         "{err}"
     );
-    let (code, _, err) = flexiso(&["info", "/nonexistent/volume.nrrd"]);
+    let Run {
+        code, stderr: err, ..
+    } = flexiso(&["info", "/nonexistent/volume.nrrd"]);
     assert_eq!(code, 2);
     assert!(err.contains("No such file"), "{err}");
 }

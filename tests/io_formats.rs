@@ -3,13 +3,12 @@
 //! data in other formats matches its NRRD twin.
 #![allow(clippy::unwrap_used)]
 
-mod io_common;
-use io_common::*;
+mod common;
+use common::formats::*;
 
 use base64::Engine as _;
 use flexiso::field::Values;
 use flexiso::field::io::{RawLayout, ReadOptions, read_volume};
-use std::path::Path;
 
 // ---------------------------------------------------------------- raw
 
@@ -54,11 +53,13 @@ fn raw_layout_from_options_reads_big_endian() {
 
 #[test]
 fn shared_raw_neghip_matches_its_nrrd() {
-    let raw = read(Path::new(&format!(
-        "{DATA}/formats/neghip_64x64x64_uint8.raw"
-    )))
-    .unwrap();
-    let nrrd = read(Path::new(&format!("{DATA}/neghip.nrrd"))).unwrap();
+    let (Some(raw), Some(nrrd)) = (
+        common::dataset("formats/neghip_64x64x64_uint8.raw"),
+        common::dataset("neghip.nrrd"),
+    ) else {
+        return;
+    };
+    let (raw, nrrd) = (read(&raw).unwrap(), read(&nrrd).unwrap());
     assert_eq!(raw.field.dims(), [64, 64, 64]);
     assert_eq!(raw.field.values(), nrrd.field.values());
 }
@@ -388,8 +389,13 @@ fn nifti_pair_reads_img_beside_hdr() {
 
 #[test]
 fn shared_colin27_nifti_matches_its_nrrd() {
-    let nii = read(Path::new(&format!("{DATA}/formats/colin27_ch2.nii.gz"))).unwrap();
-    let nrrd = read(Path::new(&format!("{DATA}/colin27_ch2.nrrd"))).unwrap();
+    let (Some(nii), Some(nrrd)) = (
+        common::dataset("formats/colin27_ch2.nii.gz"),
+        common::dataset("colin27_ch2.nrrd"),
+    ) else {
+        return;
+    };
+    let (nii, nrrd) = (read(&nii).unwrap(), read(&nrrd).unwrap());
     assert_eq!(nii.field.dims(), [181, 217, 181]);
     assert_eq!(nii.field.dims(), nrrd.field.dims());
     assert_eq!(nii.field.spacing(), nrrd.field.spacing());

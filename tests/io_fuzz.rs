@@ -4,8 +4,8 @@
 //! volume or a one-line error naming the file; never a panic.
 #![allow(clippy::unwrap_used)]
 
-mod io_common;
-use io_common::*;
+mod common;
+use common::formats::*;
 
 use base64::Engine as _;
 use flexiso::field::io::{ReadOptions, read_volume};

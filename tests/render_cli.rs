@@ -2,33 +2,13 @@
 //! refuses bad requests with a message. Rendering needs an adapter: those
 //! checks are skipped without one unless `FLEXISO_REQUIRE_GPU=1`.
 
-use std::process::Command;
+mod common;
 
+use common::flexiso;
 use flexiso::field::synthetic::Synthetic;
 use flexiso::progress::Progress;
-use flexiso::render::{DEFAULT_BACKGROUND, Gpu};
+use flexiso::render::DEFAULT_BACKGROUND;
 use flexiso::tree::ContourTree;
-
-fn has_gpu() -> bool {
-    match Gpu::new() {
-        Ok(_) => true,
-        Err(e) => {
-            assert!(
-                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
-                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
-            );
-            eprintln!("skipping: {e}");
-            false
-        }
-    }
-}
-
-fn flexiso(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_flexiso"))
-        .args(args)
-        .output()
-        .expect("run flexiso")
-}
 
 fn drawn_fraction(img: &image::RgbaImage) -> f32 {
     let bg = DEFAULT_BACKGROUND.map(|c| (c * 255.0).round() as i32);
@@ -45,7 +25,7 @@ fn drawn_fraction(img: &image::RgbaImage) -> f32 {
 
 #[test]
 fn render_writes_a_png_of_all_contours_and_of_one_arc() {
-    if !has_gpu() {
+    if common::gpu().is_none() {
         return;
     }
     let dir = tempfile::tempdir().expect("temp dir");
@@ -60,11 +40,7 @@ fn render_writes_a_png_of_all_contours_and_of_one_arc() {
         "--iso",
         "0.45",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.success(), "{}", out.stderr);
     let img = image::open(&all).expect("png").to_rgba8();
     assert_eq!(img.dimensions(), (320, 240));
     let f = drawn_fraction(&img);
@@ -93,11 +69,7 @@ fn render_writes_a_png_of_all_contours_and_of_one_arc() {
         "--arc",
         &format!("{upper}:{lower}"),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.success(), "{}", out.stderr);
     let img = image::open(&one).expect("png").to_rgba8();
     assert_eq!(img.dimensions(), (200, 150));
     assert!(drawn_fraction(&img) > 0.001);
@@ -114,8 +86,8 @@ fn render_refuses_bad_requests_with_a_message() {
     ];
     for (args, expect) in cases {
         let out = flexiso(args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = &out.stderr;
+        assert!(!out.success(), "{args:?} succeeded");
         assert!(err.contains(expect), "{args:?}: {err}");
     }
 }

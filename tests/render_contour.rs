@@ -3,26 +3,17 @@
 //! isosurface, rendered headless and picked. Needs an adapter: skipped
 //! without one unless `FLEXISO_REQUIRE_GPU=1`.
 
-use flexiso::contour::{self, ContourFollower, Isovalue};
+use flexiso::contour::{self, ContourFollower};
+use flexiso::field::Isovalue;
 use flexiso::field::synthetic::Synthetic;
 use flexiso::progress::Progress;
-use flexiso::render::{Camera, DEFAULT_BACKGROUND, Gpu, Renderer};
+use flexiso::render::{Camera, DEFAULT_BACKGROUND, Renderer};
 use flexiso::tree::{ArcId, ContourTree};
 use glam::Vec3;
 
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) => {
-            assert!(
-                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
-                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
-            );
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
+mod common;
+
+use common::gpu;
 
 fn save(name: &str, img: &image::RgbaImage) {
     if let Ok(dir) = std::env::var("FLEXISO_RENDER_TEST_OUT") {

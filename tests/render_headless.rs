@@ -3,27 +3,13 @@
 //! a note and pass, unless `FLEXISO_REQUIRE_GPU=1`, where they fail.
 
 use flexiso::render::{
-    Camera, DEFAULT_BACKGROUND, Gpu, HeadlessMesh, Renderer, icosphere, render_to_image,
+    Camera, DEFAULT_BACKGROUND, HeadlessMesh, Renderer, icosphere, render_to_image,
 };
 use glam::Vec3;
 
-/// The GPU, or None (skip) when there is none and none is required.
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => {
-            eprintln!("adapter: {}", g.describe());
-            Some(g)
-        }
-        Err(e) => {
-            assert!(
-                std::env::var("FLEXISO_REQUIRE_GPU").as_deref() != Ok("1"),
-                "FLEXISO_REQUIRE_GPU=1 but no adapter: {e}"
-            );
-            eprintln!("skipping: {e}");
-            None
-        }
-    }
-}
+mod common;
+
+use common::gpu;
 
 /// Whether the `FLEXISO_RENDER_TEST_OUT` folder is set; then the images
 /// are saved there for a person to look at.

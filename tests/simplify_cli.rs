@@ -2,25 +2,21 @@
 //! the JSON carries the perturbed tree, the collapsed tree and the
 //! simplified level with its curve, consistently.
 
+mod common;
+
+use common::flexiso;
 use serde_json::Value;
 use std::collections::HashSet;
-use std::process::Command;
 
 fn tree_json(args: &[&str]) -> Value {
     let dir = tempfile::tempdir().expect("temp dir");
     let path = dir.path().join("tree.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_flexiso"))
-        .args(["tree", "synthetic-noisy:20", "--json"])
-        .arg(&path)
-        .args(args)
-        .output()
-        .expect("flexiso runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let path_arg = path.to_str().expect("utf-8 path");
+    let mut all = vec!["tree", "synthetic-noisy:20", "--json", path_arg];
+    all.extend_from_slice(args);
+    let out = flexiso(&all);
+    assert!(out.success(), "{}", out.stderr);
+    let stdout = &out.stdout;
     assert!(stdout.contains("collapsed arcs:"), "{stdout}");
     serde_json::from_str(&std::fs::read_to_string(&path).expect("json written"))
         .expect("valid JSON")

@@ -31,7 +31,8 @@ use egui::{Color32, Key, Modifiers, RichText};
 use rayon::prelude::*;
 
 use crate::cli::input::InputArgs;
-use crate::contour::{ContourMesh, Isovalue, all_contours};
+use crate::contour::{ContourMesh, all_contours};
+use crate::field::Isovalue;
 use crate::field::ScalarField;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;

@@ -16,10 +16,8 @@ use egui::Color32;
 
 use super::view3d::prepare;
 
-use crate::contour::{
-    ContourFollower, ContourMesh, FollowerScratch, Isovalue, MeshTopology, path_seed,
-};
-use crate::field::ScalarField;
+use crate::contour::{ContourFollower, ContourMesh, FollowerScratch, MeshTopology, path_seed};
+use crate::field::{Isovalue, ScalarField};
 use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
 

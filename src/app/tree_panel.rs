@@ -13,7 +13,8 @@
 
 use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2, pos2, vec2};
 
-use crate::contour::{Isovalue, path_seed_in_chain};
+use crate::contour::path_seed_in_chain;
+use crate::field::Isovalue;
 use crate::simplify::{SimplifiedArcId, SimplifiedTree};
 
 use super::pipeline::Dataset;

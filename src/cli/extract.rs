@@ -13,16 +13,15 @@
 //! characteristic, genus, and the Euler characteristic the tree predicts
 //! (Pascucci & Cole-McLaughlin §4, [`ContourTopology`]).
 
+use super::arcs::{Arcs, Target, parse_arc};
 use super::input::InputArgs;
 use crate::contour::export::{MeshFormat, write_contours};
-use crate::contour::{
-    self, ContourFollower, ContourMesh, Isovalue, MeshTopology, PathSeed, PathSeeds,
-};
-use crate::field::ScalarField;
+use crate::contour::{self, ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds};
+use crate::field::Isovalue;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
-use crate::simplify::{Measure, Simplification, SimplifiedTree};
-use crate::tree::{ArcId, ContourTree};
+use crate::simplify::Measure;
+use crate::tree::ContourTree;
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -64,26 +63,6 @@ pub struct Args {
     pub out: Option<PathBuf>,
 }
 
-fn parse_arc(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = s
-        .split_once(':')
-        .ok_or_else(|| format!("'{s}' is not UPPER:LOWER (two vertex ids)"))?;
-    let id = |t: &str| {
-        t.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("'{t}' is not a vertex id"))
-    };
-    Ok((id(a)?, id(b)?))
-}
-
-/// An arc whose contour may be extracted: its ends (mesh vertices) and the
-/// superarcs it stands for, ascending.
-struct Target {
-    upper: u32,
-    lower: u32,
-    chain: Vec<ArcId>,
-}
-
 /// Runs `flexiso extract`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Check what is cheap to check before the expensive work.
@@ -120,7 +99,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let (tree, _) = ContourTree::from_field(field, &Progress::new())
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
-    let targets = targets(&tree, field, &args)?;
+    let arcs = match args.simplify {
+        Some(n) => Arcs::Simplified(n, args.measure),
+        None => Arcs::Superarcs,
+    };
+    let targets = arcs.targets(&tree, field)?;
     out!(
         "tree:     {} superarcs{} ({:.3} s)",
         tree.arcs().len(),
@@ -136,20 +119,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let (found, seeds): (Vec<&Target>, Vec<PathSeed>) = match args.arc {
         Some((upper, lower)) => {
-            let target = targets
-                .iter()
-                .find(|t| t.upper == upper && t.lower == lower)
-                .with_context(|| {
-                    format!(
-                        "no arc runs from vertex {upper} down to vertex {lower} (ends are \
-                         critical vertices, the higher first; see flexiso tree --json{})",
-                        if args.simplify.is_some() {
-                            ", \"simplified\""
-                        } else {
-                            ""
-                        }
-                    )
-                })?;
+            let target = arcs.find(&targets, (upper, lower))?;
             let (top, bottom) = (field.value(upper), field.value(lower));
             let seed = path_seeds
                 .seed_in_chain(&tree, field, &target.chain, iso)
@@ -250,35 +220,4 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// The arcs to extract from: every superarc, or every arc of the
-/// simplified tree.
-fn targets(tree: &ContourTree, field: &ScalarField, args: &Args) -> anyhow::Result<Vec<Target>> {
-    let Some(n) = args.simplify else {
-        return Ok(tree
-            .arcs()
-            .iter()
-            .enumerate()
-            .map(|(a, arc)| Target {
-                upper: tree.node(arc.upper).vertex,
-                lower: tree.node(arc.lower).vertex,
-                chain: vec![ArcId(a as u32)],
-            })
-            .collect());
-    };
-    if n == 0 {
-        bail!("--simplify needs at least 1 arc");
-    }
-    let sim = Simplification::new(tree, field, args.measure);
-    let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
-    level.set_level(n);
-    Ok(level
-        .arcs()
-        .map(|a| Target {
-            upper: a.upper_vertex,
-            lower: a.lower_vertex,
-            chain: a.chain.to_vec(),
-        })
-        .collect())
 }

@@ -1,6 +1,7 @@
 //! The command line: one module per subcommand. Each has an `Args` (clap)
 //! and a `run` that returns an error for the binary to print (exit code 2).
 
+pub mod arcs;
 pub mod bench;
 pub mod extract;
 pub mod info;

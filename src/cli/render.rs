@@ -11,10 +11,12 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 
+use super::arcs::{Arcs, Target, parse_arc};
 use super::input::InputArgs;
-use crate::contour::{self, Isovalue};
+use crate::contour;
+use crate::field::Isovalue;
 use crate::render::{Camera, HeadlessMesh};
-use crate::tree::{ArcId, ContourTree};
+use crate::tree::ContourTree;
 
 /// Arguments of `flexiso render`.
 #[derive(clap::Args, Debug, Default)]
@@ -41,18 +43,6 @@ pub struct Args {
     /// Camera elevation, degrees.
     #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
     pub pitch: f32,
-}
-
-fn parse_arc(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = s
-        .split_once(':')
-        .ok_or_else(|| format!("'{s}' is not UPPER:LOWER (two vertex ids)"))?;
-    let id = |t: &str| {
-        t.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("'{t}' is not a vertex id"))
-    };
-    Ok((id(a)?, id(b)?))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -98,13 +88,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let (lo, hi) = field.range();
     let surfaces = match args.arc {
-        Some((upper, lower)) => {
-            let arc = find_arc(&tree, upper, lower)?;
-            let a = tree.arc(arc);
-            let (top, bottom) = (
-                field.value(tree.node(a.upper).vertex),
-                field.value(tree.node(a.lower).vertex),
-            );
+        Some(ends) => {
+            let targets = Arcs::Superarcs.targets(&tree, field)?;
+            let target = Arcs::Superarcs.find(&targets, ends)?;
+            let (upper, lower) = ends;
+            let (top, bottom) = (field.value(upper), field.value(lower));
             let h = args.iso.unwrap_or(0.5 * (top + bottom));
             if !(bottom..=top).contains(&h) {
                 bail!(
@@ -113,7 +101,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 );
             }
             eprintln!("arc {upper}:{lower} at h = {h}");
-            arc_contour(field, &tree, arc, h)?
+            arc_contour(field, &tree, target, h)?
         }
         None => {
             let h = args.iso.unwrap_or(0.5 * (lo + hi));
@@ -161,29 +149,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The superarc whose ends are the critical vertices `upper` and `lower`.
-fn find_arc(tree: &ContourTree, upper: u32, lower: u32) -> anyhow::Result<ArcId> {
-    tree.arcs()
-        .iter()
-        .position(|a| tree.node(a.upper).vertex == upper && tree.node(a.lower).vertex == lower)
-        .map(|i| ArcId(i as u32))
-        .with_context(|| {
-            format!(
-                "no superarc runs from vertex {upper} down to vertex {lower} \
-                 (ends are critical vertices, the higher first; see flexiso tree --json)"
-            )
-        })
-}
-
 /// The contour of one arc at `h`.
 fn arc_contour(
     field: &crate::field::ScalarField,
     tree: &ContourTree,
-    arc: ArcId,
+    target: &Target,
     h: f64,
 ) -> anyhow::Result<Vec<Surface>> {
     let iso = Isovalue::new(h);
-    let seed = contour::path_seed(tree, field, arc, iso).with_context(|| {
+    let seed = contour::path_seed_in_chain(tree, field, &target.chain, iso).with_context(|| {
         format!("the arc has no contour at h = {h} (it spans h only strictly inside its range)")
     })?;
     let mesh = contour::ContourFollower::new(field).follow(&seed, iso);

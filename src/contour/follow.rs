@@ -26,7 +26,8 @@
 //! triangle normal where the gradient vanishes or disagrees with the
 //! triangles' winding (see [`gradient_normals`]).
 
-use super::{ContourMesh, Isovalue, PathSeed};
+use super::{ContourMesh, PathSeed};
+use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
 use std::hash::{BuildHasherDefault, Hasher};

@@ -3,16 +3,14 @@
 //! explorer's path is one parallel sweep over the volume (see
 //! `super::sweep`); following every seed in parallel and a plain
 //! marching-tetrahedra pass over the whole volume are the independent
-//! oracles of the tests.
+//! oracles of the tests ([`super::oracle`]).
 
-use super::follow::{ContourFollower, IdBuildHasher, TetTables};
+use super::ContourMesh;
+use super::follow::ContourFollower;
 use super::seed::{PathSeed, PathSeeds, arc_spans};
-use super::{ContourMesh, Isovalue};
-use crate::field::{Scalar, ScalarField};
-use crate::mesh::CUBE_TETRAHEDRA;
+use crate::field::{Isovalue, ScalarField};
 use crate::tree::{ArcId, ContourTree};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::sync::Mutex;
 
 /// The superarcs spanning `iso`, ascending by id: one per component of
@@ -72,21 +70,6 @@ pub fn contours_through(
     follow_all(field, seeds, iso)
 }
 
-/// [`all_contours`] by following every contour from its path seed, in
-/// parallel: the independent way, kept for the tests.
-pub fn all_contours_by_following(
-    tree: &ContourTree,
-    field: &ScalarField,
-    iso: Isovalue,
-) -> Vec<ContourMesh> {
-    let path_seeds = PathSeeds::new();
-    let seeds: Vec<PathSeed> = spanning_arcs(tree, field, iso)
-        .into_iter()
-        .filter_map(|arc| path_seeds.seed(tree, field, arc, iso))
-        .collect();
-    follow_all(field, &seeds, iso)
-}
-
 /// The contours through `seeds` at `iso`, in the seeds' order, followed in
 /// parallel (rayon) with one [`ContourFollower`] per worker thread, so
 /// every follower's slot array is allocated once, not once per task.
@@ -104,66 +87,4 @@ pub fn follow_all(field: &ScalarField, seeds: &[PathSeed], iso: Isovalue) -> Vec
             follower.follow(seed, iso)
         })
         .collect()
-}
-
-/// The whole isosurface at `iso` by a plain marching-tetrahedra pass over
-/// every tetrahedron of the volume, as one indexed mesh (arc 0), with the
-/// same case tables, interpolation and vertex sharing as contour following.
-/// O(volume): the tests' oracle, not the explorer's path.
-pub fn marching_tetrahedra(field: &ScalarField, iso: Isovalue) -> ContourMesh {
-    let mut out = ContourMesh::empty(ArcId(0));
-    let dims = field.dims();
-    if dims.iter().any(|&d| d < 2) {
-        return out;
-    }
-    crate::with_values!(field.values(), v => march(v.as_slice(), field, iso, &mut out));
-    out.normals = super::follow::vertex_normals(&out.positions, &out.indices);
-    out
-}
-
-fn march<T: Scalar>(values: &[T], field: &ScalarField, iso: Isovalue, out: &mut ContourMesh) {
-    let dims = field.dims();
-    let spacing = field.spacing();
-    let tables = TetTables::get();
-    let (sy, sz) = (dims[0], dims[0] * dims[1]);
-    let off = |m: u8| (m & 1) as usize + sy * (m >> 1 & 1) as usize + sz * (m >> 2 & 1) as usize;
-    let mut edge_vertex: HashMap<u64, u32, IdBuildHasher> = HashMap::default();
-    for z in 0..dims[2] - 1 {
-        for y in 0..dims[1] - 1 {
-            for x in 0..dims[0] - 1 {
-                let o = x + sy * y + sz * z;
-                for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
-                    let ids = t.map(|m| (o + off(m)) as u32);
-                    let vals = ids.map(|v| values[v as usize].to_f64());
-                    let mut mask = 0u8;
-                    for l in 0..4 {
-                        mask |= (iso.above_value(vals[l], ids[l]) as u8) << l;
-                    }
-                    let (tris, count) = &tables.cases[p][mask as usize];
-                    for tri in &tris[..*count as usize] {
-                        for &(b, a) in tri {
-                            let (vb, va) = (ids[b as usize], ids[a as usize]);
-                            let k = (vb.min(va) as u64) << 32 | vb.max(va) as u64;
-                            let next = out.positions.len() as u32;
-                            let idx = *edge_vertex.entry(k).or_insert_with(|| {
-                                let (fb, fa) = (vals[b as usize], vals[a as usize]);
-                                let s = if fa != fb {
-                                    ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
-                                } else {
-                                    0.5
-                                };
-                                let (cb, ca) = (field.coords(vb), field.coords(va));
-                                out.positions.push(std::array::from_fn(|k| {
-                                    let (pb, pa) = (cb[k] as f64, ca[k] as f64);
-                                    ((pb + s * (pa - pb)) * spacing[k]) as f32
-                                }));
-                                next
-                            });
-                            out.indices.push(idx);
-                        }
-                    }
-                }
-            }
-        }
-    }
 }

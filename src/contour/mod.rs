@@ -13,7 +13,7 @@
 //!   mesh per superarc) by one parallel sweep over the volume whose
 //!   components the arcs' path seeds name (`sweep`); following every seed
 //!   instead, and a plain marching-tetrahedra pass over the whole volume,
-//!   are kept as the tests' oracles.
+//!   are the tests' oracles (`oracle`, hidden: not part of the API).
 //! * [`topology`]: vertices, edges, Euler characteristic, boundary,
 //!   orientation, area and volume of an extracted mesh.
 //! * [`export`]: binary PLY, OBJ and binary STL.
@@ -44,60 +44,20 @@
 pub mod export;
 pub mod follow;
 pub mod global;
+#[doc(hidden)]
+pub mod oracle;
 pub mod seed;
 mod sweep;
 pub mod topology;
 
+#[doc(no_inline)]
+pub use crate::field::Isovalue;
 pub use follow::{ContourFollower, FollowerScratch};
-pub use global::{
-    all_contours, all_contours_by_following, contours_through, follow_all, marching_tetrahedra,
-};
+pub use global::{all_contours, contours_through, follow_all};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;
 
-use crate::field::ScalarField;
 use crate::tree::ArcId;
-
-/// An isovalue as a cut in the vertex order (see the module doc): `v` is
-/// above iff `(f(v), v) > (value, tie)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Isovalue {
-    /// The value, in the field's units.
-    pub value: f64,
-    /// Vertices of exactly `value` are above iff their id exceeds `tie`.
-    pub tie: u32,
-}
-
-impl Isovalue {
-    /// The level set at `h + ε`: every vertex of value `h` lies below.
-    pub fn new(h: f64) -> Self {
-        Self {
-            value: h,
-            tie: u32::MAX,
-        }
-    }
-
-    /// The cut just above vertex `v` in the vertex order: `v` and every
-    /// vertex before it lie below, every later vertex above.
-    pub fn just_above(field: &ScalarField, v: u32) -> Self {
-        Self {
-            value: field.value(v),
-            tie: v,
-        }
-    }
-
-    /// True when vertex `v` of value `f` lies above the cut.
-    #[inline(always)]
-    pub fn above_value(&self, f: f64, v: u32) -> bool {
-        f > self.value || (f == self.value && v > self.tie)
-    }
-
-    /// True when vertex `v` of `field` lies above the cut.
-    #[inline]
-    pub fn is_above(&self, field: &ScalarField, v: u32) -> bool {
-        self.above_value(field.value(v), v)
-    }
-}
 
 /// One extracted contour: an indexed triangle mesh in world units
 /// (grid coordinates times spacing).

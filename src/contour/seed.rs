@@ -36,7 +36,7 @@
 //!   with the DFS intervals of a rooted tree ([`PathSeeds`] keeps them;
 //!   [`path_seed`] builds them when it meets a bare arc, O(supernodes)).
 
-use super::Isovalue;
+use crate::field::Isovalue;
 use crate::field::ScalarField;
 use crate::mesh::EDGE_OFFSETS;
 use crate::tree::{ArcId, ContourTree, NodeId, VertexPlace};

@@ -39,7 +39,8 @@
 //! label) and two dense tables of one plane per worker.
 
 use super::follow::{TetTables, area_normal, downhill, normalize, prefer_gradient};
-use super::{ContourMesh, Isovalue, PathSeed};
+use super::{ContourMesh, PathSeed};
+use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
 use crate::tree::ArcId;

@@ -72,10 +72,6 @@ pub trait Scalar: Copy + PartialOrd + Send + Sync + 'static {
 pub trait VertexOrder: Sync {
     /// True when vertex `a` comes after vertex `b`.
     fn above(&self, a: u32, b: u32) -> bool;
-
-    /// Prefetches the values of the star of `v` (see
-    /// [`Mesh::prefetch_star`](crate::mesh::Mesh::prefetch_star)).
-    fn prefetch<M: crate::mesh::Mesh>(&self, _mesh: &M, _v: u32) {}
 }
 
 impl<T: Scalar> VertexOrder for [T] {
@@ -84,10 +80,52 @@ impl<T: Scalar> VertexOrder for [T] {
         let (fa, fb) = (self[a as usize], self[b as usize]);
         fa > fb || (fa == fb && a > b)
     }
+}
 
+/// An isovalue as a cut in the vertex order: vertex `v` is *above* it iff
+/// `(f(v), v) > (value, tie)` lexicographically, the same simulation of
+/// simplicity the vertex order breaks ties by. A level set is then never
+/// *on* a vertex: every edge it crosses has one end strictly on each side.
+///
+/// [`Isovalue::new`] puts the cut just above every vertex of value `h`
+/// (`tie = u32::MAX`): the level set at `h + ε`.
+/// [`Isovalue::just_above`] cuts between one vertex and the next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Isovalue {
+    /// The value, in the field's units.
+    pub value: f64,
+    /// Vertices of exactly `value` are above iff their id exceeds `tie`.
+    pub tie: u32,
+}
+
+impl Isovalue {
+    /// The level set at `h + ε`: every vertex of value `h` lies below.
+    pub fn new(h: f64) -> Self {
+        Self {
+            value: h,
+            tie: u32::MAX,
+        }
+    }
+
+    /// The cut just above vertex `v` in the vertex order: `v` and every
+    /// vertex before it lie below, every later vertex above.
+    pub fn just_above(field: &ScalarField, v: u32) -> Self {
+        Self {
+            value: field.value(v),
+            tie: v,
+        }
+    }
+
+    /// True when vertex `v` of value `f` lies above the cut.
     #[inline(always)]
-    fn prefetch<M: crate::mesh::Mesh>(&self, mesh: &M, v: u32) {
-        mesh.prefetch_star(v, self);
+    pub fn above_value(&self, f: f64, v: u32) -> bool {
+        f > self.value || (f == self.value && v > self.tie)
+    }
+
+    /// True when vertex `v` of `field` lies above the cut.
+    #[inline]
+    pub fn is_above(&self, field: &ScalarField, v: u32) -> bool {
+        self.above_value(field.value(v), v)
     }
 }
 
@@ -339,10 +377,5 @@ impl ScalarField {
     /// Smallest and largest value.
     pub fn range(&self) -> (f64, f64) {
         self.values.range()
-    }
-
-    /// The Freudenthal triangulation of this grid.
-    pub fn mesh(&self) -> crate::mesh::FreudenthalGrid {
-        crate::mesh::FreudenthalGrid::new(self.dims)
     }
 }

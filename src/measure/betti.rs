@@ -33,7 +33,7 @@
 //! **Memory:** a table of 2^14 bytes, 12 bytes per supernode while peeling,
 //! 24 bytes per segment; nothing per vertex.
 
-use crate::contour::Isovalue;
+use crate::field::Isovalue;
 use crate::field::ScalarField;
 use crate::mesh::{EDGE_OFFSETS, Mesh};
 use crate::tree::{ArcId, ContourTree};
@@ -366,9 +366,18 @@ mod tests {
         ScalarField::new([n; 3], Values::F32(v)).unwrap()
     }
 
-    /// The superarc holding the contour at `h` of a field with one.
+    /// The superarc holding the contour at `h` of a field with one: the
+    /// only arc whose lower end is below the cut and upper end above.
     fn only_contour(tree: &ContourTree, field: &ScalarField, h: f64) -> ArcId {
-        let arcs = crate::contour::global::spanning_arcs(tree, field, Isovalue::new(h));
+        let iso = Isovalue::new(h);
+        let arcs: Vec<ArcId> = (0..tree.arcs().len() as u32)
+            .map(ArcId)
+            .filter(|&a| {
+                let a = tree.arc(a);
+                !iso.is_above(field, tree.node(a.lower).vertex)
+                    && iso.is_above(field, tree.node(a.upper).vertex)
+            })
+            .collect();
         assert_eq!(arcs.len(), 1);
         arcs[0]
     }

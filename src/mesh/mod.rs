@@ -10,7 +10,7 @@
 //!
 //! No edge list is stored: the mesh costs nothing per vertex.
 
-use crate::field::VertexOrder;
+use crate::field::{ScalarField, VertexOrder};
 use strength_reduce::StrengthReducedU32;
 
 /// A simplicial mesh as the contour tree engine sees it: vertices `0..n` and
@@ -188,6 +188,14 @@ impl LinkTable {
             })
             .collect();
         Self { entries, codes }
+    }
+}
+
+impl ScalarField {
+    /// The Freudenthal triangulation of this field's grid (defined here,
+    /// beside the mesh, so the field knows nothing of meshes).
+    pub fn mesh(&self) -> FreudenthalGrid {
+        FreudenthalGrid::new(self.dims())
     }
 }
 

@@ -424,29 +424,10 @@ impl Simplification {
 
     /// The original superarcs (of the perturbed tree) an arc stands for: a
     /// monotone path, ascending in value, so the one holding isovalue `h`
-    /// is found by binary search ([`Simplification::superarc_at`]).
+    /// is found by binary search (`contour::seed` does).
     pub fn chain(&self, a: SimplifiedArcId) -> &[ArcId] {
         let s = self.chain_start[a.0 as usize] as usize;
         &self.chain[s..s + self.chain_len[a.0 as usize] as usize]
-    }
-
-    /// The original superarc of arc `a` whose value range holds `h`:
-    /// binary search on its chain. At a value shared by two superarcs of
-    /// the chain (the plateau between them) the lower one is returned.
-    /// `None` when `h` is outside the arc's range.
-    pub fn superarc_at(
-        &self,
-        a: SimplifiedArcId,
-        h: f64,
-        tree: &ContourTree,
-        field: &ScalarField,
-    ) -> Option<ArcId> {
-        let chain = self.chain(a);
-        let top = |e: ArcId| field.value(tree.node(tree.arc(e).upper).vertex);
-        let bottom = |e: ArcId| field.value(tree.node(tree.arc(e).lower).vertex);
-        let i = chain.partition_point(|&e| top(e) < h);
-        let e = *chain.get(i)?;
-        (bottom(e) <= h).then_some(e)
     }
 
     /// The representative mesh vertex of a node.

@@ -1,32 +1,20 @@
-//! Helpers shared by the integration tests.
-#![allow(dead_code)]
+//! Helpers shared by the integration tests, one module per thing:
+//!
+//! * [`data`]: the shared data folder, relative to the crate; tests skip
+//!   when it is absent, fail when `FLEXISO_REQUIRE_DATA=1`.
+//! * [`gpu`]: a graphics adapter, or a skip; fail when
+//!   `FLEXISO_REQUIRE_GPU=1`.
+//! * [`bin`]: running the `flexiso` binary and reading what it printed.
+//! * [`formats`]: volume files for the reader tests (encoders, writers).
+//!
+//! Each test binary compiles this module whole and uses a part of it.
+#![allow(dead_code, unused_imports, clippy::unwrap_used)]
 
-use std::path::PathBuf;
+pub mod bin;
+pub mod data;
+pub mod formats;
+pub mod gpu;
 
-/// The shared data folder (../shared/data next to the repository), or None
-/// when it is absent. With `FLEXISO_REQUIRE_DATA=1` (as in CI) an absent
-/// folder is a failure, not a skip.
-pub fn data_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
-    if dir.join("MANIFEST.tsv").is_file() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var("FLEXISO_REQUIRE_DATA").as_deref() != Ok("1"),
-        "FLEXISO_REQUIRE_DATA=1 but {} is missing",
-        dir.display()
-    );
-    eprintln!("skipping: {} is absent", dir.display());
-    None
-}
-
-/// One dataset from the shared folder, or None (skip) when absent.
-pub fn dataset(name: &str) -> Option<PathBuf> {
-    let p = data_dir()?.join(name);
-    assert!(
-        p.is_file(),
-        "{} is missing from the data folder",
-        p.display()
-    );
-    Some(p)
-}
+pub use bin::{Run, flexiso, flexiso_with_stdin};
+pub use data::{data_dir, dataset};
+pub use gpu::gpu;

@@ -254,7 +254,7 @@ pub fn parse_ascii(
             };
             v.push(
                 t.parse()
-                    .map_err(|_| DataError::BadNumber(super::nrrd::clip(t)))?,
+                    .map_err(|_| DataError::BadNumber(super::clip(t)))?,
             );
         }
         Ok(v)

@@ -10,8 +10,9 @@
 //! `ElementNumberOfChannels` (must be 1). Keys are matched without case.
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
-use super::nrrd::clip;
-use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
+use super::{
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+};
 use std::path::Path;
 
 const MAX_HEADER: usize = 1 << 20;

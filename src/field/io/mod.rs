@@ -194,6 +194,23 @@ pub(crate) fn io_error(path: &Path, error: std::io::Error) -> ReadError {
     }
 }
 
+/// At most 60 characters of user text, control characters escaped, so
+/// that messages stay on one line.
+pub(crate) fn clip(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars().take(60) {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    if s.chars().count() > 60 {
+        out.push('…');
+    }
+    out
+}
+
 /// A scalar type a file can hold. Wider than [`Values`]: 64-bit integers are
 /// read and converted to f64.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

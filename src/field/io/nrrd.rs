@@ -14,7 +14,9 @@
 //! compressed encodings.
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
-use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
+use super::{
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+};
 use std::io::{BufRead, BufReader, Seek, SeekFrom};
 use std::path::Path;
 
@@ -246,23 +248,6 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
 
 fn is_magic(line: &str) -> bool {
     line.len() == 8 && line.starts_with("NRRD000") && line.as_bytes()[7].is_ascii_digit()
-}
-
-/// At most 60 characters of user text, control characters escaped, so
-/// that messages stay on one line.
-pub(crate) fn clip(s: &str) -> String {
-    let mut out = String::new();
-    for c in s.chars().take(60) {
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    if s.chars().count() > 60 {
-        out.push('…');
-    }
-    out
 }
 
 #[derive(Default)]

@@ -52,7 +52,7 @@ pub fn read(path: &Path, layout: &RawLayout, opts: &ReadOptions) -> Result<Volum
             path,
             format!(
                 "unknown type '{}' (uint8, int8, uint16, int16, uint32, int32, uint64, int64, float32, float64)",
-                super::nrrd::clip(&layout.scalar_type)
+                super::clip(&layout.scalar_type)
             ),
         )
     })?;

@@ -18,8 +18,9 @@
 //! for what VTK and common writers produce.
 
 use super::data::{self, DataError, DataSpec, Encoding, Tail, read_data};
-use super::nrrd::clip;
-use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
+use super::{
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+};
 use base64::Engine as _;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;

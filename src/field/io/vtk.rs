@@ -10,8 +10,7 @@
 //! 64-bit (what VTK writes on Linux and macOS).
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
-use super::nrrd::clip;
-use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid};
+use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid};
 use std::path::Path;
 
 const MAX_HEADER: usize = 1 << 20;

@@ -1,15 +1,11 @@
-//! Helpers shared by the reader tests: a reference volume, encoders for
-//! every scalar type, compressors, writers for each format, and SHA-256
-//! (to check decoded values against /work/shared/data/MANIFEST.tsv).
-#![allow(dead_code, clippy::unwrap_used)]
+//! Files for the reader tests: a reference volume, encoders for every
+//! scalar type, compressors, writers for each format, and SHA-256 (to check
+//! decoded values against the data folder's MANIFEST.tsv).
 
 use flexiso::field::Values;
 use flexiso::field::io::{ReadError, ReadOptions, Volume, read_volume};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// The shared data folder.
-pub const DATA: &str = "/work/shared/data";
 
 /// Every scalar type by its canonical name.
 pub const TYPES: [&str; 10] = [
