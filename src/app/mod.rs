@@ -20,6 +20,7 @@
 pub mod dataset;
 pub mod exports;
 pub mod format;
+pub mod ids;
 pub mod instrument;
 pub mod jobs;
 pub mod panels;

@@ -12,25 +12,15 @@ use std::sync::Arc;
 
 use egui::Color32;
 
+pub use super::ids::ContourId;
+use super::ids::prepare;
 use super::jobs::Notify;
 use super::jobs::extraction::{Done, Extractions, extract_mesh};
-use super::panels::view3d::prepare;
 
 use crate::contour::{ContourMesh, FollowerScratch, MeshTopology};
 use crate::field::ScalarField;
 use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
-
-/// A selected contour, by the order it was picked (never reused while the
-/// explorer runs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct ContourId(pub u64);
-
-impl std::fmt::Display for ContourId {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}", self.0)
-    }
-}
 
 /// Colour `i` of the shared palette ([`crate::render::PALETTE`]).
 pub fn palette(i: usize) -> Color32 {

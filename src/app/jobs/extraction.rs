@@ -13,8 +13,8 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use super::{Job, Notify};
-use crate::app::panels::view3d::prepare;
-use crate::app::selection::ContourId;
+use crate::app::ids::ContourId;
+use crate::app::ids::prepare;
 use crate::contour::{
     ContourFollower, ContourMesh, FollowerScratch, Isovalue, MeshTopology, path_seed,
 };

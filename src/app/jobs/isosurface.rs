@@ -10,7 +10,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::{Job, Notify};
-use crate::app::panels::view3d::prepare;
+use crate::app::ids::prepare;
 use crate::contour::{ContourMesh, Isovalue, all_contours};
 use crate::field::ScalarField;
 use crate::render::PreparedMesh;

@@ -11,8 +11,7 @@ use std::sync::Arc;
 
 use egui::{Color32, Sense};
 
-use crate::app::selection::ContourId;
-use crate::contour::ContourMesh;
+use crate::app::ids::ContourId;
 use crate::render::{Camera, EguiTexture, MeshId, PreparedMesh, Renderer};
 
 /// What a mesh of the scene is, as the explorer names it; the view gives
@@ -47,21 +46,6 @@ pub struct SceneMesh {
 /// holding one frame for 100 ms: copying into fresh buffers costs a page
 /// fault per 4 KiB besides the copy.
 pub const UPLOAD_BUDGET: u64 = 8 << 20;
-
-/// `mesh` made ready for the GPU, for the threads that extract contours
-/// (a contour mesh is always well formed; None would mean a bug, logged).
-pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
-    match PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices) {
-        Ok(m) => Some(Arc::new(m)),
-        Err(e) => {
-            eprintln!(
-                "flexiso: contour of arc {:?} cannot be drawn: {e}",
-                mesh.arc
-            );
-            None
-        }
-    }
-}
 
 /// What happened in the view this frame.
 #[derive(Clone, Copy, Debug, Default)]
