@@ -217,7 +217,11 @@ fn drag_latency(name: &str, tree: &ContourTree, field: &ScalarField) {
             r.set_prepared_mesh(&g.device, 1, std::sync::Arc::new(prepared))
                 .expect("upload");
             assert!(
-                !r.upload_pending(&g.device, &g.queue, flexiso::app::view3d::UPLOAD_BUDGET),
+                !r.upload_pending(
+                    &g.device,
+                    &g.queue,
+                    flexiso::app::panels::view3d::UPLOAD_BUDGET
+                ),
                 "one frame's budget"
             );
             let _ = g.device.poll(wgpu::PollType::wait_indefinitely());

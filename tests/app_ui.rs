@@ -8,6 +8,7 @@ use egui::{Pos2, pos2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flexiso::app::FlexisoApp;
+use flexiso::app::panels::view3d::SceneKey;
 use flexiso::field::synthetic::Synthetic;
 use flexiso::simplify::SimplifiedArcId;
 
@@ -102,7 +103,7 @@ fn clicking_an_arc_selects_its_contour_and_a_mesh_appears_in_the_scene() {
     );
     if gpu {
         assert!(
-            app.view3d().mesh_ids().contains(&c.id),
+            app.view3d().mesh_ids().contains(&SceneKey::Contour(c.id)),
             "the 3D view holds the contour's mesh: {:?}",
             app.view3d().mesh_ids()
         );
@@ -198,7 +199,7 @@ fn dragging_a_marker_changes_the_contours_isovalue() {
         "the marker moved up with the drag"
     );
     if gpu {
-        assert!(app.view3d().mesh_ids().contains(&id));
+        assert!(app.view3d().mesh_ids().contains(&SceneKey::Contour(id)));
     }
 }
 

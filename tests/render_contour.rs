@@ -183,7 +183,10 @@ fn all_contours_render_and_each_is_pickable() {
             .expect("vertices");
         let q = vp.project_point3(nearest);
         let (x, y) = ((q.x + 1.0) * 0.5 * w as f32, (1.0 - q.y) * 0.5 * h as f32);
-        if r.pick(&camera, w as f32, h as f32, x, y).map(|(id, _)| id) == Some(u64::from(m.arc.0)) {
+        if r.pick(&camera, w as f32, h as f32, x, y)
+            .map(|(id, _)| id.0)
+            == Some(u64::from(m.arc.0))
+        {
             hits += 1;
         }
     }

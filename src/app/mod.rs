@@ -1,145 +1,67 @@
 //! The explorer window (eframe + egui): a thin layer over the engine.
 //!
-//! * [`pipeline`]: reading, tree and simplification on a worker thread,
-//!   with a progress bar and cancellation; errors become messages and the
-//!   previous dataset stays.
-//! * [`tree_panel`]: the simplified contour tree, markers, global isovalue.
-//! * [`curve_panel`]: the simplification curve and the level slider.
-//! * [`view3d`]: the selected contours through [`crate::render`].
+//! * [`dataset`]: what one volume's pipeline run made (field, trees,
+//!   simplification, layout, curve), shared by every panel.
+//! * [`jobs`]: everything off the UI thread, one [`jobs::Job`] state
+//!   machine for all of it: the pipeline, contour extraction, all contours
+//!   at h, Betti numbers, exports, file dialogs.
+//! * [`panels`]: the tree, the curve, the 3D view, the contour list, the
+//!   menu and status bars, one per file.
 //! * [`selection`]: the shared state the panels talk through.
-//! * [`layout`]: stable x positions of the tree's nodes.
+//! * [`exports`], [`instrument`], [`format`]: File > Export, the frame log
+//!   and position dump for scripts, how numbers are written.
 //!
-//! [`FlexisoApp`] owns them all and wires them together once per frame;
-//! no panel reaches into another's fields. Display toggles never trigger
-//! recomputation: only opening a file, changing the measure (background
-//! jobs) and moving a contour's isovalue (one contour, a few ms) compute.
+//! [`FlexisoApp`] owns them all and wires them together once per frame
+//! (this file holds nothing else); no panel reaches into another's fields.
+//! Display toggles never trigger recomputation: only opening a file,
+//! changing the measure (background jobs) and moving a contour's isovalue
+//! (one contour, a few ms) compute.
 
-pub mod curve_panel;
-pub mod layout;
-pub mod pipeline;
+pub mod dataset;
+pub mod exports;
+pub mod format;
+pub mod ids;
+pub mod instrument;
+pub mod jobs;
+pub mod panels;
 pub mod selection;
-pub mod tree_panel;
-pub mod view3d;
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
 use egui::{Color32, Key, Modifiers, RichText};
-use rayon::prelude::*;
 
-use crate::cli::input::InputArgs;
-use crate::contour::{ContourMesh, all_contours};
-use crate::field::Isovalue;
 use crate::field::ScalarField;
+use crate::field::io::ReadOptions;
+use crate::field::source::VolumeSource;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
-use crate::render::PreparedMesh;
 use crate::simplify::{Measure, SimplifiedTree};
 
-use curve_panel::CurvePanel;
-use pipeline::{Dataset, Pipeline, Request};
-use selection::{PALETTE, Selection};
-use tree_panel::{TreePanel, fmt_value};
-use view3d::{SceneMesh, View3d};
+use dataset::{DEFAULT_ARCS, Dataset};
+use instrument::{FrameLog, UiDump};
+use jobs::betti::BettiJob;
+use jobs::dialog::{DialogJob, DialogKind};
+use jobs::export::Exports;
+use jobs::isosurface::AllContours;
+use jobs::{Job, JobError, Notify};
+use panels::curve::CurvePanel;
+use panels::menu::{Action, Menu, Status};
+use panels::tree::TreePanel;
+use panels::view3d::{SceneKey, SceneMesh, View3d};
+use selection::{Selection, palette};
 
-/// Renderer ids of the "all contours at h" meshes start here (selected
-/// contours use small ids).
-const ALL_CONTOURS_ID: u64 = 1 << 40;
-
-/// The controls, as the Help menu shows them.
-pub const CONTROLS: &str = "\
-Tree: click an arc to see its contour (at the isovalue line when the arc \
-spans it, else at the arc's middle); shift-click adds one. Drag a marker \
-to move its contour's isovalue: past a node it follows the level set (it \
-splits going up through a join, contours that meet merge). Drag the \
-dashed line to move the isovalue. Wheel zooms, right or middle drag pans, \
-double-click resets.
-Curve: drag on it, or the slider, to simplify the tree (log-log: arcs \
-against feature size).
-3D view: drag rotates, wheel zooms, right or middle drag pans, \
-double-click fits the contours (again: the volume); click a surface to \
-pick it.
-Keys: Ctrl+O opens, Delete removes the active contour, Escape clears. \
-Drop a volume file on the window to open it.";
+pub use jobs::pipeline::Request;
+pub use jobs::yield_to_ui;
+pub use panels::menu::CONTROLS;
 
 /// How often the window redraws on its own while a job runs.
 const PROGRESS_REPAINT: Duration = Duration::from_millis(200);
 
-/// How many arcs the tree shows when a dataset opens.
-pub const DEFAULT_ARCS: usize = 100;
-
-/// A file dialog's answer, delivered from its thread.
-enum Dialog {
-    Open(PathBuf),
-    ExportContours(PathBuf),
-    Screenshot(PathBuf),
-    TreeJson(PathBuf),
-}
-
-/// Every contour at the global isovalue, one mesh per component,
-/// extracted on a worker thread (a whole isosurface of a big volume takes
-/// seconds on a small machine; the window keeps drawing meanwhile).
-struct AllContours {
-    /// (isovalue bits, field) of the meshes shown.
-    key: Option<(u64, usize)>,
-    /// The key being computed.
-    pending: Option<(u64, usize)>,
-    meshes: Vec<Arc<ContourMesh>>,
-    /// The same, ready for the GPU (one per mesh).
-    gpu: Vec<Arc<PreparedMesh>>,
-    version: u64,
-    millis: f64,
-    tx: Sender<IsosurfaceResult>,
-    rx: Receiver<IsosurfaceResult>,
-}
-
-/// An extraction of every contour at h: its key, the meshes (and the same
-/// ready for the GPU), milliseconds.
-type IsosurfaceResult = (
-    (u64, usize),
-    Vec<(Arc<ContourMesh>, Arc<PreparedMesh>)>,
-    f64,
-);
-
-impl AllContours {
-    fn install(&mut self, (key, meshes, millis): IsosurfaceResult) {
-        self.pending = None;
-        self.key = Some(key);
-        (self.meshes, self.gpu) = meshes.into_iter().unzip();
-        self.millis = millis;
-        self.version += 1;
-    }
-}
-
-impl Default for AllContours {
-    fn default() -> Self {
-        let (tx, rx) = channel();
-        Self {
-            key: None,
-            pending: None,
-            meshes: Vec::new(),
-            gpu: Vec::new(),
-            version: 0,
-            millis: 0.0,
-            tx,
-            rx,
-        }
-    }
-}
-
-/// Frame times written with `flexiso open --frame-log FILE`.
-struct FrameLog {
-    file: std::io::BufWriter<std::fs::File>,
-    start: Instant,
-    last: Option<Instant>,
-}
-
 /// The explorer.
 pub struct FlexisoApp {
-    pipeline: Pipeline,
+    pipeline: Job<Dataset>,
     dataset: Option<Dataset>,
     level: Option<SimplifiedTree>,
     measure: Measure,
@@ -150,82 +72,71 @@ pub struct FlexisoApp {
     tree_panel: TreePanel,
     curve_panel: CurvePanel,
     view3d: View3d,
+    menu: Menu,
     error: Option<String>,
     info: Option<String>,
-    dialog_tx: Sender<Dialog>,
-    dialog_rx: Receiver<Dialog>,
-    /// Exports write on their own threads and report here (a message for
-    /// the info line, or an error).
-    export_tx: Sender<Result<String, String>>,
-    export_rx: Receiver<Result<String, String>>,
-    exports_running: usize,
+    dialog: DialogJob,
+    exports: Exports,
+    /// Betti numbers of every superarc's contours (computed after the
+    /// dataset is shown), for the tree's tooltips.
+    betti: BettiJob,
     pending_screenshot: Option<PathBuf>,
     frame_log: Option<FrameLog>,
     /// UI time of the last frame (ms), shown in the status bar.
     ui_ms: f64,
-    /// Where to write the screen positions of arcs and markers (scripts).
-    ui_dump: Option<(PathBuf, String)>,
-    all_checkbox: Option<egui::Rect>,
+    ui_dump: Option<UiDump>,
     /// Frames the tree panel has been sized for a full window.
     sized_frames: u32,
-    /// Betti numbers of every superarc's contours (computed after the
-    /// dataset is shown, on a worker), for the tree's tooltips.
-    betti: Option<Arc<ContourTopology>>,
-    betti_rx: Option<Receiver<(usize, Arc<ContourTopology>)>>,
+    /// Wakes the window when a job ends (None in tests without one).
+    notify: Option<Notify>,
     /// The window's context (None in tests built without one).
     ctx: Option<egui::Context>,
-    /// The "Open a path" window and its field.
-    path_window: bool,
-    path_input: String,
 }
 
 impl FlexisoApp {
-    /// An explorer with nothing loaded.
-    pub fn empty() -> Self {
-        let (dialog_tx, dialog_rx) = channel();
-        let (export_tx, export_rx) = channel();
+    /// An explorer with nothing loaded; jobs wake the window through
+    /// `notify`.
+    fn with_notify(notify: Option<Notify>) -> Self {
         Self {
-            pipeline: Pipeline::new(),
+            pipeline: Job::new(notify.clone()),
             dataset: None,
             level: None,
             measure: Measure::default(),
             selection: Selection::default(),
             global_h: 0.0,
             show_all: false,
-            all: AllContours::default(),
+            all: AllContours::new(notify.clone()),
             tree_panel: TreePanel::new(),
             curve_panel: CurvePanel::default(),
             view3d: View3d::new(),
+            menu: Menu::default(),
             error: None,
             info: None,
-            dialog_tx,
-            dialog_rx,
-            export_tx,
-            export_rx,
-            exports_running: 0,
+            dialog: Job::new(notify.clone()),
+            exports: Exports::default(),
+            betti: Job::new(notify.clone()),
             pending_screenshot: None,
             frame_log: None,
             ui_ms: 0.0,
             ui_dump: None,
-            all_checkbox: None,
             sized_frames: 0,
-            betti: None,
-            betti_rx: None,
+            notify,
             ctx: None,
-            path_window: false,
-            path_input: String::new(),
         }
+    }
+
+    /// An explorer with nothing loaded.
+    pub fn empty() -> Self {
+        Self::with_notify(None)
     }
 
     /// The window's app: starts `request` in the background at once.
     pub fn new(cc: &eframe::CreationContext<'_>, request: Request) -> Self {
-        let mut app = Self::empty();
-        app.ctx = Some(cc.egui_ctx.clone());
         let ctx = cc.egui_ctx.clone();
-        let notify: Arc<dyn Fn() + Send + Sync> = Arc::new(move || ctx.request_repaint());
-        app.pipeline.set_notify(Arc::clone(&notify));
-        app.selection
-            .set_extractor(selection::Extractor::new(Some(notify)));
+        let notify: Notify = Arc::new(move || ctx.request_repaint());
+        let mut app = Self::with_notify(Some(Arc::clone(&notify)));
+        app.ctx = Some(cc.egui_ctx.clone());
+        app.selection.extract_in_background(Some(notify));
         app.start(request);
         app
     }
@@ -236,12 +147,12 @@ impl FlexisoApp {
     }
 
     /// An explorer on `field`, with the pipeline already run (tests: no
-    /// window needed). Contours are extracted on a worker as in the
+    /// window needed). Contours are extracted in background jobs as in the
     /// window: call [`FlexisoApp::wait_for_extractions`].
     pub fn new_for_test(field: ScalarField) -> Self {
         let mut app = Self::empty();
-        app.selection.set_extractor(selection::Extractor::new(None));
-        let result = pipeline::run(
+        app.selection.extract_in_background(None);
+        let result = jobs::pipeline::run(
             Request::Field {
                 name: "test".into(),
                 field: Arc::new(field),
@@ -256,13 +167,7 @@ impl FlexisoApp {
     /// Writes one line per frame to `path`: seconds since start, ms since
     /// the previous frame, ms spent in the UI code, the job stage.
     pub fn set_frame_log(&mut self, path: &std::path::Path) -> std::io::Result<()> {
-        let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
-        writeln!(file, "t_s\tframe_ms\tui_ms\tstage")?;
-        self.frame_log = Some(FrameLog {
-            file,
-            start: Instant::now(),
-            last: None,
-        });
+        self.frame_log = Some(FrameLog::create(path)?);
         Ok(())
     }
 
@@ -271,69 +176,61 @@ impl FlexisoApp {
     /// `arc ID X Y HEIGHT`, `marker ID X Y`, `curve|tree|view X0 Y0 X1 Y1`, and
     /// `contours N`. For scripts that click with xdotool.
     pub fn set_ui_dump(&mut self, path: PathBuf) {
-        self.ui_dump = Some((path, String::new()));
+        self.ui_dump = Some(UiDump::new(path));
     }
 
     fn write_ui_dump(&mut self, view: egui::Rect) {
-        let Some((path, last)) = &mut self.ui_dump else {
+        let Some(dump) = &mut self.ui_dump else {
             return;
-        };
-        let mut s = String::new();
-        let r = |s: &mut String, name: &str, r: egui::Rect| {
-            s.push_str(&format!(
-                "{name} {:.0} {:.0} {:.0} {:.0}\n",
-                r.min.x, r.min.y, r.max.x, r.max.y
-            ));
         };
         let d = &self.tree_panel.drawn;
         if let Some(t) = d.rect {
-            r(&mut s, "tree", t);
+            dump.rect("tree", t);
         }
         if let Some(c) = self.curve_panel.plot_rect {
-            r(&mut s, "curve", c);
+            dump.rect("curve", c);
         }
-        r(&mut s, "view", view);
-        if let Some(c) = self.all_checkbox {
-            r(&mut s, "allbox", c);
+        dump.rect("view", view);
+        if let Some(c) = self.menu.all_checkbox {
+            dump.rect("allbox", c);
         }
-        s.push_str(&format!("contours {}\n", self.selection.contours.len()));
+        dump.line(format_args!("contours {}", self.selection.contours.len()));
         for (id, p) in &d.markers {
-            s.push_str(&format!("marker {id} {:.0} {:.0}\n", p.x, p.y));
+            dump.line(format_args!("marker {id} {:.0} {:.0}", p.x, p.y));
         }
         for ((id, p), h) in d.arcs.iter().zip(&d.arc_heights) {
-            s.push_str(&format!("arc {} {:.0} {:.0} {:.0}\n", id.0, p.x, p.y, h));
+            dump.line(format_args!("arc {} {:.0} {:.0} {:.0}", id.0, p.x, p.y, h));
         }
-        if *last != s {
-            let _ = std::fs::write(&*path, &s);
-            *last = s;
-        }
+        dump.flush();
     }
 
     /// Starts a background job (cancelling the current one).
     pub fn start(&mut self, request: Request) {
-        let what = match &request {
-            Request::Open(i) => i.input.clone(),
-            Request::Field { name, .. } => name.clone(),
-            Request::Resimplify { .. } => format!("{} simplification", self.measure),
-        };
-        self.pipeline.start(request, self.measure, what);
+        let what = request.describe(self.measure);
+        let measure = self.measure;
+        self.pipeline
+            .start(what, move |p| jobs::pipeline::run(request, measure, p));
     }
 
     /// Opens a file (or `synthetic[:N]`) in the background.
     pub fn open(&mut self, input: &str) {
-        self.start(Request::Open(InputArgs::from_input(input)));
+        match VolumeSource::parse(input, ReadOptions::default()) {
+            Ok(source) => self.start(Request::Open(source)),
+            Err(e) => self.error = Some(e.to_string()),
+        }
     }
 
     /// Blocks until the current job ends and takes its result (tests).
     pub fn wait_for_job(&mut self) {
-        if let Some(r) = self.pipeline.wait() {
+        self.pipeline.wait();
+        if let Some(r) = self.pipeline.take() {
             self.accept(r);
         }
     }
 
     /// True while a job runs.
     pub fn busy(&self) -> bool {
-        self.pipeline.running().is_some()
+        self.pipeline.is_running()
     }
 
     /// The dataset shown.
@@ -376,119 +273,86 @@ impl FlexisoApp {
         self.error.as_deref()
     }
 
+    /// The info line (what the last action did), if any.
+    pub fn info(&self) -> Option<&str> {
+        self.info.as_deref()
+    }
+
     /// The global isovalue.
     pub fn global_h(&self) -> f64 {
         self.global_h
     }
 
-    fn accept(&mut self, result: pipeline::JobResult) {
-        match result {
-            Ok(ds) => {
-                let t = ds.times;
-                eprintln!(
-                    "flexiso: {} ready in {:.2} s (read {:.2}, tree {:.2}, simplify {:.2}, layout {:.2})",
-                    ds.name,
-                    t.total().as_secs_f64(),
-                    t.load.as_secs_f64(),
-                    t.tree.as_secs_f64(),
-                    t.simplify.as_secs_f64(),
-                    t.layout.as_secs_f64()
-                );
-                let same_field = self
-                    .dataset
-                    .as_ref()
-                    .is_some_and(|old| Arc::ptr_eq(&old.field, &ds.field));
-                let mut ds = ds;
-                // Made by the job (about as many arcs as before for
-                // another measure); reaching a level can replay millions
-                // of steps, too slow for the UI thread.
-                let level = ds.first_level.take().unwrap_or_else(|| {
-                    let mut level = SimplifiedTree::new(Arc::clone(&ds.sim));
-                    level.set_level(DEFAULT_ARCS);
-                    level
-                });
-                if !same_field {
-                    let (lo, hi) = ds.range;
-                    self.global_h = 0.5 * (lo + hi);
-                    self.selection.clear();
-                    self.all = AllContours::default();
-                    let [nx, ny, nz] = ds.field.dims();
-                    let [sx, sy, sz] = ds.field.spacing();
-                    self.view3d.set_bounds(
-                        [0.0; 3],
-                        [
-                            ((nx - 1) as f64 * sx) as f32,
-                            ((ny - 1) as f64 * sy) as f32,
-                            ((nz - 1) as f64 * sz) as f32,
-                        ],
-                    );
-                    // Show something at once: the contour of the most
-                    // important arc spanning the middle value.
-                    self.tree_panel.reset();
-                }
-                for w in &ds.warnings {
-                    eprintln!("warning: {w}");
-                }
-                self.info = (!ds.warnings.is_empty()).then(|| ds.warnings.join("; "));
-                if !same_field {
-                    self.start_betti(&ds);
-                }
-                if let Some(ctx) = &self.ctx {
-                    ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!(
-                        "flexiso — {}",
-                        ds.name
-                    )));
-                }
-                self.level = Some(level);
-                self.dataset = Some(ds);
-                self.error = None;
+    /// Installs a pipeline run's outcome: a new dataset (or a new
+    /// simplification of the one shown), or its error.
+    fn accept(&mut self, result: jobs::pipeline::JobResult) {
+        let mut ds = match result {
+            Ok(ds) => ds,
+            Err(JobError::Cancelled) => return,
+            Err(e) => {
+                self.error = Some(e.to_string());
+                return;
             }
-            Err(e) if e == "cancelled" => {}
-            Err(e) => self.error = Some(e),
+        };
+        let t = ds.times;
+        eprintln!(
+            "flexiso: {} ready in {:.2} s (read {:.2}, tree {:.2}, simplify {:.2}, layout {:.2})",
+            ds.name,
+            t.total().as_secs_f64(),
+            t.load.as_secs_f64(),
+            t.tree.as_secs_f64(),
+            t.simplify.as_secs_f64(),
+            t.layout.as_secs_f64()
+        );
+        let same_field = self
+            .dataset
+            .as_ref()
+            .is_some_and(|old| Arc::ptr_eq(&old.field, &ds.field));
+        // Made by the job (about as many arcs as before for another
+        // measure); reaching a level can replay millions of steps, too
+        // slow for the UI thread.
+        let level = ds.first_level.take().unwrap_or_else(|| {
+            let mut level = SimplifiedTree::new(Arc::clone(&ds.sim));
+            level.set_level(DEFAULT_ARCS);
+            level
+        });
+        if !same_field {
+            let (lo, hi) = ds.range;
+            self.global_h = 0.5 * (lo + hi);
+            self.selection.clear();
+            self.all = AllContours::new(self.notify.clone());
+            let (min, max) = crate::render::grid_bounds(ds.field.dims(), ds.field.spacing());
+            self.view3d.set_bounds(min, max);
+            self.tree_panel.reset();
+            jobs::betti::start(&mut self.betti, &ds);
         }
+        for w in &ds.warnings {
+            eprintln!("warning: {w}");
+        }
+        self.info = (!ds.warnings.is_empty()).then(|| ds.warnings.join("; "));
+        if let Some(ctx) = &self.ctx {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!(
+                "flexiso — {}",
+                ds.name
+            )));
+        }
+        self.level = Some(level);
+        self.dataset = Some(ds);
+        self.error = None;
     }
 
-    fn start_betti(&mut self, ds: &Dataset) {
-        self.betti = None;
-        let (tx, rx) = channel();
-        self.betti_rx = Some(rx);
-        let (tree, field) = (Arc::clone(&ds.tree), Arc::clone(&ds.field));
-        let key = Arc::as_ptr(&ds.field) as usize;
-        let notify = self.pipeline.notifier();
-        let _ = std::thread::Builder::new()
-            .name("flexiso-betti".into())
-            .spawn(move || {
-                pipeline::yield_to_ui();
-                let topo = Arc::new(ContourTopology::new(&tree, &field));
-                let _ = tx.send((key, topo));
-                if let Some(n) = notify {
-                    n();
-                }
-            });
-    }
-
-    fn poll_betti(&mut self) {
-        let Some(rx) = &self.betti_rx else { return };
-        if let Ok((key, topo)) = rx.try_recv() {
-            if self
-                .dataset
-                .as_ref()
-                .is_some_and(|d| Arc::as_ptr(&d.field) as usize == key)
-            {
-                self.betti = Some(topo);
-            }
-            self.betti_rx = None;
-        }
+    /// The Betti numbers of the dataset shown, once computed.
+    fn betti(&self) -> Option<Arc<ContourTopology>> {
+        self.dataset
+            .as_ref()
+            .and_then(|ds| jobs::betti::of(&self.betti, ds))
     }
 
     /// Waits for the Betti numbers of the dataset shown (tests).
     pub fn wait_for_betti(&mut self) -> Option<Arc<ContourTopology>> {
-        if let Some(rx) = self.betti_rx.take()
-            && let Ok((_, topo)) = rx.recv()
-        {
-            self.betti = Some(topo);
-        }
-        self.betti.clone()
+        self.betti.wait();
+        self.betti.poll();
+        self.betti()
     }
 
     /// Selects the contour of the live arc `arc` (tests; the tree panel
@@ -499,8 +363,7 @@ impl FlexisoApp {
         }
     }
 
-    fn spawn_dialog(&self, kind: &'static str) {
-        let tx = self.dialog_tx.clone();
+    fn spawn_dialog(&mut self, kind: DialogKind) {
         let start_dir = self
             .dataset
             .as_ref()
@@ -511,209 +374,33 @@ impl FlexisoApp {
             .as_ref()
             .map(|d| d.name.split('.').next().unwrap_or("flexiso").to_string())
             .unwrap_or_else(|| "flexiso".into());
-        // rfd's portal backend is thread-safe; the UI keeps running.
-        let _ = std::thread::Builder::new()
-            .name("flexiso-dialog".into())
-            .spawn(move || {
-                let mut d = rfd::FileDialog::new();
-                if let Some(dir) = start_dir {
-                    d = d.set_directory(dir);
-                }
-                let answer = match kind {
-                    "open" => d.set_title("Open a volume").pick_file().map(Dialog::Open),
-                    "contours" => d
-                        .set_title("Export contours")
-                        .add_filter("mesh", &["ply", "obj", "stl"])
-                        .set_file_name(format!("{stem}_contours.ply"))
-                        .save_file()
-                        .map(Dialog::ExportContours),
-                    "screenshot" => d
-                        .set_title("Save the 3D view")
-                        .add_filter("PNG", &["png"])
-                        .set_file_name(format!("{stem}.png"))
-                        .save_file()
-                        .map(Dialog::Screenshot),
-                    _ => d
-                        .set_title("Export the contour tree")
-                        .add_filter("JSON", &["json"])
-                        .set_file_name(format!("{stem}_tree.json"))
-                        .save_file()
-                        .map(Dialog::TreeJson),
-                };
-                if let Some(a) = answer {
-                    let _ = tx.send(a);
-                }
-            });
-    }
-
-    /// Writes the visible selected contours (or, with none selected, the
-    /// contours at h shown) to a mesh file.
-    pub fn export_contours(&self, path: &std::path::Path) -> anyhow::Result<usize> {
-        self.contour_export(path)?()
-    }
-
-    /// What [`FlexisoApp::export_contours`] writes, gathered (cheaply, on
-    /// the UI thread) into a closure that writes it (anywhere).
-    fn contour_export(
-        &self,
-        path: &std::path::Path,
-    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<usize> + Send + 'static> {
-        let mut meshes: Vec<Arc<ContourMesh>> = Vec::new();
-        let mut names = Vec::new();
-        for c in &self.selection.contours {
-            if let Some(m) = &c.mesh
-                && self.selection.shown(c)
-            {
-                meshes.push(Arc::clone(m));
-                names.push(format!("contour_{}_h{}", c.id, fmt_value(c.h)));
-            }
-        }
-        if meshes.is_empty() && self.show_all {
-            for (i, m) in self.all.meshes.iter().enumerate() {
-                meshes.push(Arc::clone(m));
-                names.push(format!("component_{i}_h{}", fmt_value(self.global_h)));
-            }
-        }
-        if meshes.is_empty() {
-            anyhow::bail!("no contour to export: select one in the tree first");
-        }
-        let path = path.to_path_buf();
-        Ok(move || {
-            crate::contour::export::write_contours(&path, &meshes, &names)?;
-            Ok(meshes.len())
-        })
-    }
-
-    /// Writes the tree, the collapsed tree and the level shown as JSON.
-    pub fn export_tree_json(&self, path: &std::path::Path) -> anyhow::Result<()> {
-        self.tree_export(path)?()
-    }
-
-    /// What [`FlexisoApp::export_tree_json`] writes, as a closure.
-    fn tree_export(
-        &self,
-        path: &std::path::Path,
-    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<()> + Send + 'static> {
-        let (Some(ds), Some(level)) = (&self.dataset, &self.level) else {
-            anyhow::bail!("no dataset loaded");
-        };
-        let (tree, field, collapsed) = (
-            Arc::clone(&ds.tree),
-            Arc::clone(&ds.field),
-            Arc::clone(&ds.collapsed),
-        );
-        let level = level.clone();
-        let path = path.to_path_buf();
-        Ok(move || {
-            let mut json = crate::tree::json::tree_json(&tree, &field);
-            if let Some(obj) = json.as_object_mut() {
-                obj.insert(
-                    "collapsed".into(),
-                    crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
-                );
-                obj.insert(
-                    "simplified".into(),
-                    crate::simplify::json::simplified_tree_json(&level, &tree),
-                );
-            }
-            std::fs::write(&path, serde_json::to_string(&json)?)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
-            Ok(())
-        })
-    }
-
-    /// Exports the contours as File > Export does: gathered now, written
-    /// on another thread (a whole isosurface is tens of megabytes), the
-    /// outcome in the info line.
-    pub fn start_contour_export(&mut self, p: PathBuf) {
-        match self.contour_export(&p) {
-            Ok(write) => self.export_in_background(move || match write() {
-                Ok(n) => Ok(format!("wrote {n} contour(s) to {}", p.display())),
-                Err(e) => Err(format!("{e:#}")),
-            }),
-            Err(e) => self.error = Some(format!("{e:#}")),
-        }
-    }
-
-    /// Exports the tree as JSON as File > Export does, on another thread.
-    pub fn start_tree_export(&mut self, p: PathBuf) {
-        match self.tree_export(&p) {
-            Ok(write) => self.export_in_background(move || match write() {
-                Ok(()) => Ok(format!("wrote {}", p.display())),
-                Err(e) => Err(format!("{e:#}")),
-            }),
-            Err(e) => self.error = Some(format!("{e:#}")),
-        }
-    }
-
-    /// The info line (what the last action did), if any.
-    pub fn info(&self) -> Option<&str> {
-        self.info.as_deref()
-    }
-
-    /// Runs an export's writing on its own thread; its outcome shows in
-    /// the info line when done.
-    fn export_in_background(
-        &mut self,
-        write: impl FnOnce() -> Result<String, String> + Send + 'static,
-    ) {
-        let tx = self.export_tx.clone();
-        let ctx = self.ctx.clone();
-        self.exports_running += 1;
-        self.info = Some("writing…".into());
-        let spawned = std::thread::Builder::new()
-            .name("flexiso-export".into())
-            .spawn(move || {
-                let _ = tx.send(write());
-                if let Some(ctx) = ctx {
-                    ctx.request_repaint();
-                }
-            });
-        if let Err(e) = spawned {
-            self.exports_running -= 1;
-            self.error = Some(format!("cannot start the export: {e}"));
-        }
-    }
-
-    /// Installs the outcomes of finished exports.
-    fn poll_exports(&mut self) {
-        while let Ok(r) = self.export_rx.try_recv() {
-            self.export_done(r);
-        }
-    }
-
-    fn export_done(&mut self, outcome: Result<String, String>) {
-        self.exports_running = self.exports_running.saturating_sub(1);
-        match outcome {
-            Ok(msg) => self.info = Some(msg),
-            Err(e) => self.error = Some(e),
-        }
-    }
-
-    /// Waits for the exports in flight (tests).
-    pub fn wait_for_exports(&mut self) {
-        while self.exports_running > 0 {
-            match self.export_rx.recv_timeout(Duration::from_secs(60)) {
-                Ok(r) => self.export_done(r),
-                Err(_) => return,
-            }
-        }
+        jobs::dialog::spawn(&mut self.dialog, kind, start_dir, stem);
     }
 
     fn handle_dialogs(&mut self) {
-        while let Ok(d) = self.dialog_rx.try_recv() {
-            match d {
-                Dialog::Open(p) => self.open(&p.to_string_lossy()),
-                Dialog::ExportContours(p) => self.start_contour_export(p),
-                Dialog::TreeJson(p) => self.start_tree_export(p),
-                Dialog::Screenshot(p) => self.pending_screenshot = Some(p),
-            }
+        let Some(Ok(Some((kind, p)))) = self.dialog.poll_take() else {
+            return;
+        };
+        match kind {
+            DialogKind::Open => self.open(&p.to_string_lossy()),
+            DialogKind::ExportContours => self.start_contour_export(p),
+            DialogKind::TreeJson => self.start_tree_export(p),
+            DialogKind::Screenshot => self.pending_screenshot = Some(p),
+        }
+    }
+
+    fn act(&mut self, action: Action) {
+        match action {
+            Action::Dialog(kind) => self.spawn_dialog(kind),
+            Action::Open(input) => self.open(&input),
+            Action::SetMeasure(m) => self.set_measure(m),
+            Action::CancelJob => self.pipeline.cancel(),
         }
     }
 
     fn handle_input(&mut self, ui: &mut egui::Ui) {
         if ui.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::O)) {
-            self.spawn_dialog("open");
+            self.spawn_dialog(DialogKind::Open);
         }
         let typing = ui.ctx().egui_wants_keyboard_input();
         if !typing {
@@ -741,51 +428,21 @@ impl FlexisoApp {
         }
     }
 
-    fn update_all_contours(&mut self, ctx: &egui::Context, pointer_down: bool) {
-        while let Ok(result) = self.all.rx.try_recv() {
-            if self.all.pending == Some(result.0) {
-                self.all.install(result);
-            }
-        }
+    /// Keeps "all contours at h" current: a new extraction when the value
+    /// is let go (not on every drag frame), one at a time.
+    fn update_all_contours(&mut self, pointer_down: bool) {
+        self.all.poll();
         let Some(ds) = &self.dataset else { return };
-        if !self.show_all {
+        if !self.show_all || pointer_down {
             return;
         }
-        let key = (self.global_h.to_bits(), Arc::as_ptr(&ds.field) as usize);
-        // Recompute when the line is let go, not on every drag frame, and
-        // one extraction at a time (the latest value wins).
-        if self.all.key == Some(key) || self.all.pending.is_some() || pointer_down {
-            return;
-        }
-        self.all.pending = Some(key);
-        let (tree, field, h) = (Arc::clone(&ds.tree), Arc::clone(&ds.field), self.global_h);
-        let tx = self.all.tx.clone();
-        let ctx = ctx.clone();
-        let _ = std::thread::Builder::new()
-            .name("flexiso-isosurface".into())
-            .spawn(move || {
-                pipeline::yield_to_ui();
-                let t = Instant::now();
-                let meshes: Vec<_> = all_contours(&tree, &field, Isovalue::new(h))
-                    .into_par_iter()
-                    .filter(|m| !m.indices.is_empty())
-                    .filter_map(|m| Some((view3d::prepare(&m)?, m)))
-                    .map(|(gpu, m)| (Arc::new(m), gpu))
-                    .collect();
-                let _ = tx.send((key, meshes, t.elapsed().as_secs_f64() * 1e3));
-                ctx.request_repaint();
-            });
+        self.all.request(&ds.tree, &ds.field, self.global_h);
     }
 
     /// Waits for the "all contours at h" extraction in flight (tests).
-    pub fn wait_for_all_contours(&mut self, ctx: &egui::Context) {
-        if self.all.pending.is_none() {
-            return;
-        }
-        if let Ok(result) = self.all.rx.recv() {
-            self.all.install(result);
-        }
-        self.update_all_contours(ctx, false);
+    pub fn wait_for_all_contours(&mut self, _ctx: &egui::Context) {
+        self.all.wait();
+        self.update_all_contours(false);
     }
 
     /// Number of contours shown by "all contours at h".
@@ -832,12 +489,14 @@ impl FlexisoApp {
         self.show_all = on;
     }
 
+    /// What the 3D view draws: the selected contours, and every contour
+    /// at h (faded while contours are selected).
     fn scene(&self) -> Vec<SceneMesh> {
         let mut scene = Vec::new();
         for c in &self.selection.contours {
             if let Some(m) = &c.gpu {
                 scene.push(SceneMesh {
-                    id: c.id,
+                    key: SceneKey::Contour(c.id),
                     mesh: Arc::clone(m),
                     version: c.version,
                     colour: c.colour,
@@ -849,9 +508,9 @@ impl FlexisoApp {
         if self.show_all {
             let faded = !self.selection.contours.is_empty();
             for (i, m) in self.all.gpu.iter().enumerate() {
-                let c = PALETTE[i % PALETTE.len()];
+                let c = palette(i);
                 scene.push(SceneMesh {
-                    id: ALL_CONTOURS_ID + i as u64,
+                    key: SceneKey::AtH(i),
                     mesh: Arc::clone(m),
                     version: self.all.version,
                     colour: if faded { c.gamma_multiply(0.35) } else { c },
@@ -863,340 +522,105 @@ impl FlexisoApp {
         scene
     }
 
-    fn menu_bar(&mut self, ui: &mut egui::Ui) {
-        egui::MenuBar::new().ui(ui, |ui| {
-            ui.menu_button("File", |ui| {
-                if ui.button("Open…  (Ctrl+O)").clicked() {
-                    self.spawn_dialog("open");
+    /// A surface picked in the 3D view: a selected contour becomes the
+    /// active one; a contour at h is selected.
+    fn picked(&mut self, key: SceneKey, shift: bool) {
+        match key {
+            SceneKey::Contour(id) => self.selection.active = Some(id),
+            SceneKey::AtH(i) => {
+                if let (Some(ds), Some(m)) = (&self.dataset, self.all.meshes.get(i)) {
+                    self.selection
+                        .add(&ds.field, &ds.tree, m.arc, self.global_h, !shift);
                 }
-                if ui.button("Open the built-in dataset").clicked() {
-                    self.open("synthetic");
-                }
-                // Without a desktop portal or GTK the dialog cannot show:
-                // a typed path always works.
-                if ui.button("Open a path…").clicked() {
-                    self.path_window = true;
-                }
-                ui.separator();
-                if ui.button("Export contours (PLY/OBJ/STL)…").clicked() {
-                    self.spawn_dialog("contours");
-                }
-                if ui.button("Save 3D view as PNG…").clicked() {
-                    self.spawn_dialog("screenshot");
-                }
-                if ui.button("Export tree as JSON…").clicked() {
-                    self.spawn_dialog("tree");
-                }
-                ui.separator();
-                if ui.button("Quit").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        }
+    }
+
+    /// The menu bar, with the error or info line below it.
+    fn top_panel(&mut self, ui: &mut egui::Ui) {
+        let actions = self.menu.ui(
+            ui,
+            self.measure,
+            self.dataset.as_ref(),
+            &mut self.global_h,
+            &mut self.show_all,
+        );
+        for a in actions {
+            self.act(a);
+        }
+        if let Some(e) = self.error.clone() {
+            ui.horizontal(|ui| {
+                ui.label(RichText::new(format!("Error: {e}")).color(Color32::LIGHT_RED));
+                if ui.small_button("dismiss").clicked() {
+                    self.error = None;
                 }
             });
-            ui.menu_button("Help", |ui| {
-                ui.label(CONTROLS);
+        } else if let Some(i) = self.info.clone() {
+            ui.horizontal(|ui| {
+                ui.label(RichText::new(i).weak());
+                if ui.small_button("ok").clicked() {
+                    self.info = None;
+                }
             });
-            ui.separator();
-            let mut measure = self.measure;
-            egui::ComboBox::from_label("measure")
-                .selected_text(measure.name())
-                .show_ui(ui, |ui| {
-                    for m in Measure::ALL {
-                        ui.selectable_value(&mut measure, m, m.name());
-                    }
-                });
-            self.set_measure(measure);
-            ui.separator();
-            if let Some(ds) = &self.dataset {
-                let (lo, hi) = ds.range;
-                ui.add(
-                    egui::Slider::new(&mut self.global_h, lo..=hi)
-                        .text("isovalue")
-                        .custom_formatter(|v, _| fmt_value(v)),
-                );
-                let r = ui.checkbox(&mut self.show_all, "all contours at h");
-                self.all_checkbox = Some(r.rect);
-            }
-        });
-    }
-
-    fn path_window(&mut self, ctx: &egui::Context) {
-        if !self.path_window {
-            return;
-        }
-        let mut open = true;
-        let mut go = false;
-        egui::Window::new("Open a volume")
-            .open(&mut open)
-            .collapsible(false)
-            .show(ctx, |ui| {
-                ui.horizontal(|ui| {
-                    let label = ui.label("Path:");
-                    let r = ui
-                        .add(
-                            egui::TextEdit::singleline(&mut self.path_input)
-                                .hint_text("file, folder or synthetic:N")
-                                .desired_width(320.0),
-                        )
-                        .labelled_by(label.id);
-                    go |= r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
-                });
-                go |= ui.button("Open path").clicked();
-            });
-        if go && !self.path_input.trim().is_empty() {
-            let p = self.path_input.trim().to_string();
-            self.open(&p);
-            open = false;
-        }
-        self.path_window = open;
-    }
-
-    fn status_bar(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal_wrapped(|ui| {
-            if let Some(r) = self.pipeline.running() {
-                let (stage, f) = r.progress.get();
-                ui.add(egui::ProgressBar::new(f).desired_width(220.0).text(format!(
-                    "{}: {stage} {:.0}%",
-                    r.what,
-                    100.0 * f
-                )));
-                ui.label(format!("{:.1} s", r.started.elapsed().as_secs_f64()));
-                if ui.button("Cancel").clicked() {
-                    self.pipeline.cancel();
-                }
-                ui.separator();
-            }
-            match (&self.dataset, &self.level) {
-                (Some(ds), Some(level)) => {
-                    let [x, y, z] = ds.field.dims();
-                    let (lo, hi) = ds.range;
-                    let t = ds.times;
-                    ui.label(RichText::new(&ds.name).strong());
-                    ui.label(format!(
-                        "{x}×{y}×{z} {}  values {} .. {}",
-                        ds.field.values().type_name(),
-                        fmt_value(lo),
-                        fmt_value(hi)
-                    ));
-                    ui.separator();
-                    ui.label(format!(
-                        "superarcs {}  collapsed {}  shown {}",
-                        ds.tree.arcs().len(),
-                        ds.sim.base_arcs(),
-                        level.num_arcs()
-                    ));
-                    ui.separator();
-                    ui.label(format!(
-                        "read {:.2} s  tree {:.2} s  simplify {:.2} s",
-                        t.load.as_secs_f64(),
-                        t.tree.as_secs_f64(),
-                        (t.simplify + t.layout).as_secs_f64()
-                    ));
-                    ui.separator();
-                    ui.label(format!(
-                        "ui {:.1} ms  3D {:.1} ms",
-                        self.ui_ms, self.view3d.last_render_ms
-                    ));
-                    let n = self.selection.extracting();
-                    if n > 0 {
-                        ui.spinner();
-                        ui.label(format!("extracting {n} contour(s)"));
-                    }
-                    if self.all.pending.is_some() {
-                        ui.spinner();
-                        ui.label("extracting all contours at h…");
-                    } else if self.show_all {
-                        ui.label(format!(
-                            "{} contours at h ({:.0} ms)",
-                            self.all.meshes.len(),
-                            self.all.millis
-                        ));
-                    }
-                }
-                _ => {
-                    if self.pipeline.running().is_none() {
-                        ui.label("no dataset: File > Open (Ctrl+O) or drop a file");
-                    }
-                }
-            }
-        });
-    }
-
-    fn selection_list(&mut self, ui: &mut egui::Ui) {
-        ui.heading("Contours");
-        if self.selection.contours.is_empty() {
-            ui.label("Click an arc in the tree (shift-click adds), or a surface.");
-            ui.label("Drag a marker to move its isovalue.");
-            return;
-        }
-        ui.horizontal(|ui| {
-            if ui.button("Clear (Esc)").clicked() {
-                self.selection.clear();
-            }
-            if self.selection.isolated.is_some() && ui.button("Show all").clicked() {
-                self.selection.isolated = None;
-            }
-        });
-        let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
-        let mut remove = None;
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            for c in &mut self.selection.contours {
-                let active = self.selection.active == Some(c.id);
-                egui::Frame::group(ui.style())
-                    .stroke(egui::Stroke::new(
-                        if active { 2.0 } else { 1.0 },
-                        if active {
-                            c.colour
-                        } else {
-                            Color32::from_gray(70)
-                        },
-                    ))
-                    .show(ui, |ui| {
-                        ui.horizontal(|ui| {
-                            ui.color_edit_button_srgba(&mut c.colour);
-                            let arc = tree.as_ref().map(|t| {
-                                let a = t.arc(c.superarc);
-                                format!("{}:{}", t.node(a.upper).vertex, t.node(a.lower).vertex)
-                            });
-                            if ui
-                                .selectable_label(
-                                    active,
-                                    format!("#{}  h = {}", c.id, fmt_value(c.h)),
-                                )
-                                .on_hover_text(format!(
-                                    "superarc {} (vertices upper:lower)",
-                                    arc.unwrap_or_default()
-                                ))
-                                .clicked()
-                            {
-                                self.selection.active = Some(c.id);
-                            }
-                        });
-                        ui.horizontal(|ui| {
-                            ui.checkbox(&mut c.visible, "visible");
-                            let iso = self.selection.isolated == Some(c.id);
-                            if ui.selectable_label(iso, "isolate").clicked() {
-                                self.selection.isolated = if iso { None } else { Some(c.id) };
-                            }
-                            if ui.button("delete").clicked() {
-                                remove = Some(c.id);
-                            }
-                        });
-                        match &c.topology {
-                            Some(t) => {
-                                ui.label(format!(
-                                    "{} triangles, area {}",
-                                    t.triangles,
-                                    fmt_value(t.area)
-                                ));
-                                ui.label(format!(
-                                    "{}  genus {}{}",
-                                    if t.is_closed() {
-                                        format!("volume {}", fmt_value(t.volume))
-                                    } else {
-                                        format!("open ({} boundary loops)", t.boundary_loops)
-                                    },
-                                    t.genus(),
-                                    if t.components > 1 {
-                                        format!(", {} components", t.components)
-                                    } else {
-                                        String::new()
-                                    }
-                                ));
-                                ui.label(
-                                    RichText::new(if c.extracting() {
-                                        "extracting…".to_string()
-                                    } else {
-                                        format!("extracted in {:.1} ms", c.extract_ms)
-                                    })
-                                    .weak(),
-                                );
-                            }
-                            None if c.extracting() => {
-                                ui.horizontal(|ui| {
-                                    ui.spinner();
-                                    ui.label("extracting…");
-                                });
-                            }
-                            None if c.mesh.is_some() => {
-                                let n = c.mesh.as_ref().map_or(0, |m| m.num_triangles());
-                                ui.label(format!("{n} triangles"));
-                                ui.horizontal(|ui| {
-                                    ui.spinner();
-                                    ui.label(format!(
-                                        "measuring… (extracted in {:.1} ms)",
-                                        c.extract_ms
-                                    ));
-                                });
-                            }
-                            None => {
-                                ui.label("no contour at this value");
-                            }
-                        }
-                    });
-            }
-        });
-        if let Some(id) = remove {
-            self.selection.remove(id);
         }
     }
 
-    fn save_screenshot(&mut self, rs: Option<&egui_wgpu::RenderState>) {
-        let Some(path) = self.pending_screenshot.take() else {
+    fn status_panel(&mut self, ui: &mut egui::Ui) {
+        let status = Status {
+            running: self.pipeline.running(),
+            shown: self.dataset.as_ref().zip(self.level.as_ref()),
+            ui_ms: self.ui_ms,
+            render_ms: self.view3d.last_render_ms,
+            extracting: self.selection.extracting(),
+            all: (
+                self.show_all,
+                self.all.extracting(),
+                self.all.meshes.len(),
+                self.all.millis,
+            ),
+        };
+        if let Some(a) = panels::menu::status_bar(ui, &status) {
+            self.act(a);
+        }
+    }
+
+    /// The left panel: the tree above the curve.
+    fn tree_and_curve(&mut self, ui: &mut egui::Ui) {
+        let betti = self.betti();
+        let (Some(ds), Some(level)) = (&self.dataset, &mut self.level) else {
+            ui.label("Loading…");
             return;
         };
-        let image = rs
-            .ok_or_else(|| anyhow::anyhow!("no GPU render state"))
-            .and_then(|rs| self.view3d.read_image(rs));
-        match image {
-            // PNG encoding takes tens of milliseconds: not on this thread.
-            Ok(img) => self.export_in_background(move || match img.save(&path) {
-                Ok(()) => Ok(format!("saved {}", path.display())),
-                Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
-            }),
-            Err(e) => self.error = Some(format!("screenshot: {e:#}")),
-        }
-    }
-
-    /// Saves the 3D view at the next frame (tests, scripts).
-    pub fn request_screenshot(&mut self, path: PathBuf) {
-        self.pending_screenshot = Some(path);
+        let curve_h = 210.0f32.min(ui.available_height() * 0.4);
+        let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
+        let w = ui.available_width();
+        ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
+            self.tree_panel.betti = betti;
+            self.tree_panel
+                .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
+        });
+        ui.separator();
+        self.curve_panel.ui(ui, level, &ds.curve);
     }
 }
 
 impl eframe::App for FlexisoApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let t0 = Instant::now();
-        if let Some(r) = self.pipeline.poll() {
+        if let Some(r) = self.pipeline.poll_take() {
             self.accept(r);
         }
         self.handle_dialogs();
         self.poll_exports();
-        self.poll_betti();
+        self.betti.poll();
         self.selection.poll();
         self.handle_input(ui);
         let rs = frame.wgpu_render_state().cloned();
         let pointer_down = ui.input(|i| i.pointer.any_down());
-        self.update_all_contours(&ui.ctx().clone(), pointer_down);
+        self.update_all_contours(pointer_down);
 
-        egui::Panel::top("menu").show(ui, |ui| {
-            self.menu_bar(ui);
-            if let Some(e) = self.error.clone() {
-                ui.horizontal(|ui| {
-                    ui.label(RichText::new(format!("Error: {e}")).color(Color32::LIGHT_RED));
-                    if ui.small_button("dismiss").clicked() {
-                        self.error = None;
-                    }
-                });
-            } else if let Some(i) = self.info.clone() {
-                ui.horizontal(|ui| {
-                    ui.label(RichText::new(i).weak());
-                    if ui.small_button("ok").clicked() {
-                        self.info = None;
-                    }
-                });
-            }
-        });
-        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::top("menu").show(ui, |ui| self.top_panel(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status_panel(ui));
         // The window may start small before the window manager sizes it;
         // egui keeps the panel's first size, so size it once the window is.
         let screen_w = ui.ctx().content_rect().width();
@@ -1207,26 +631,14 @@ impl eframe::App for FlexisoApp {
                 self.sized_frames += 1;
             }
         }
-        tree.show(ui, |ui| {
-            let (Some(ds), Some(level)) = (&self.dataset, &mut self.level) else {
-                ui.label("Loading…");
-                return;
-            };
-            let curve_h = 210.0f32.min(ui.available_height() * 0.4);
-            let tree_h = (ui.available_height() - curve_h - 8.0).max(100.0);
-            let w = ui.available_width();
-            ui.allocate_ui(egui::vec2(w, tree_h), |ui| {
-                self.tree_panel.betti = self.betti.clone();
-                self.tree_panel
-                    .ui(ui, ds, level, &mut self.selection, &mut self.global_h);
-            });
-            ui.separator();
-            self.curve_panel.ui(ui, level, &ds.curve);
-        });
+        tree.show(ui, |ui| self.tree_and_curve(ui));
         egui::Panel::right("selection")
             .resizable(true)
             .default_size(250.0)
-            .show(ui, |ui| self.selection_list(ui));
+            .show(ui, |ui| {
+                let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
+                panels::contour_list::ui(ui, &mut self.selection, tree.as_deref());
+            });
         let mut view_rect = egui::Rect::NOTHING;
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
@@ -1234,53 +646,35 @@ impl eframe::App for FlexisoApp {
                 view_rect = ui.available_rect_before_wrap();
                 let scene = self.scene();
                 let ev = self.view3d.ui(ui, rs.as_ref(), &scene);
-                if let Some((id, shift)) = ev.picked {
-                    if id >= ALL_CONTOURS_ID {
-                        let i = (id - ALL_CONTOURS_ID) as usize;
-                        if let (Some(ds), Some(m)) = (&self.dataset, self.all.meshes.get(i)) {
-                            self.selection
-                                .add(&ds.field, &ds.tree, m.arc, self.global_h, !shift);
-                        }
-                    } else {
-                        self.selection.active = Some(id);
-                    }
+                if let Some((key, shift)) = ev.picked {
+                    self.picked(key, shift);
                 }
             });
-        self.path_window(&ui.ctx().clone());
+        if let Some(a) = self.menu.path_window(&ui.ctx().clone()) {
+            self.act(a);
+        }
         self.save_screenshot(rs.as_ref());
         self.write_ui_dump(view_rect);
 
-        if self.show_all && self.all.key.is_none() && self.all.pending.is_none() {
+        if self.show_all && !self.all.started() {
             // Just switched on: extract at the next frame.
             ui.ctx().request_repaint();
         }
-        if self.pipeline.running().is_some() {
+        if self.pipeline.is_running() {
             // Animate the progress bar, at a rate that leaves the cores to
             // the job: without a GPU every frame is rasterised on the CPU.
             // Input still repaints at once (and the UI thread outranks the
-            // job's threads, see pipeline::yield_to_ui).
+            // job's threads, see jobs::yield_to_ui).
             ui.ctx().request_repaint_after(PROGRESS_REPAINT);
         }
         self.ui_ms = t0.elapsed().as_secs_f64() * 1e3;
         if let Some(log) = &mut self.frame_log {
-            let now = Instant::now();
-            let frame_ms = log
-                .last
-                .map(|l| (now - l).as_secs_f64() * 1e3)
-                .unwrap_or(0.0);
-            log.last = Some(now);
             let stage = self
                 .pipeline
                 .running()
                 .map(|r| r.progress.get().0)
                 .unwrap_or_else(|| "idle".into());
-            let _ = writeln!(
-                log.file,
-                "{:.3}\t{frame_ms:.2}\t{:.2}\t{stage}",
-                (now - log.start).as_secs_f64(),
-                self.ui_ms
-            );
-            let _ = log.file.flush();
+            log.frame(self.ui_ms, &stage);
         }
     }
 }

@@ -8,45 +8,38 @@
 //! chain of superarcs, and its contour at h is the contour of the one
 //! superarc of the chain spanning h).
 
-use std::collections::HashMap;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, Sender, channel};
 
 use egui::Color32;
 
-use super::view3d::prepare;
+pub use super::ids::ContourId;
+use super::ids::prepare;
+use super::jobs::Notify;
+use super::jobs::extraction::{Done, Extractions, extract_mesh};
 
-use crate::contour::{ContourFollower, ContourMesh, FollowerScratch, MeshTopology, path_seed};
-use crate::field::{Isovalue, ScalarField};
+use crate::contour::{ContourMesh, FollowerScratch, MeshTopology};
+use crate::field::ScalarField;
 use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
 
-/// Distinct colours for contours (sRGB).
-pub const PALETTE: [Color32; 10] = [
-    Color32::from_rgb(228, 115, 51),
-    Color32::from_rgb(77, 153, 217),
-    Color32::from_rgb(115, 191, 89),
-    Color32::from_rgb(217, 89, 140),
-    Color32::from_rgb(230, 191, 64),
-    Color32::from_rgb(140, 115, 204),
-    Color32::from_rgb(89, 191, 191),
-    Color32::from_rgb(191, 140, 102),
-    Color32::from_rgb(170, 170, 80),
-    Color32::from_rgb(200, 120, 220),
-];
+/// Colour `i` of the shared palette ([`crate::render::PALETTE`]).
+pub fn palette(i: usize) -> Color32 {
+    let [r, g, b] = crate::render::PALETTE[i % crate::render::PALETTE.len()];
+    Color32::from_rgb(r, g, b)
+}
 
 /// One selected contour.
 #[derive(Clone, Debug)]
 pub struct Contour {
-    /// Stable id (also the renderer's mesh id).
-    pub id: u64,
+    /// Stable id.
+    pub id: ContourId,
     /// The superarc whose contour this is.
     pub superarc: ArcId,
-    /// The isovalue (the level set at `h + ε`, see [`Isovalue`]).
+    /// The isovalue (the level set at `h + ε`, see [`Isovalue`](crate::field::Isovalue)).
     pub h: f64,
     /// Contours split from one another by dragging through a node share a
     /// group (the first one's id) and move together.
-    pub group: u64,
+    pub group: ContourId,
     /// Colour in the 3D view and on the tree.
     pub colour: Color32,
     /// Drawn in the 3D view.
@@ -79,156 +72,35 @@ impl Contour {
     }
 }
 
-/// A contour to extract on the worker.
-struct Job {
-    id: u64,
-    request: u64,
-    superarc: ArcId,
-    h: f64,
-    field: Arc<ScalarField>,
-    tree: Arc<ContourTree>,
-}
-
-/// A worker's answer: first the mesh, then (unless a newer request for
-/// the contour came first) its measurements.
-enum Done {
-    Mesh {
-        id: u64,
-        request: u64,
-        mesh: Option<Arc<ContourMesh>>,
-        gpu: Option<Arc<PreparedMesh>>,
-        ms: f64,
-    },
-    Topology {
-        id: u64,
-        request: u64,
-        topology: MeshTopology,
-    },
-}
-
-/// Extracts contours on a worker thread, newest request per contour only:
-/// while an isovalue is dragged, requests that a newer one has replaced
-/// are skipped, so a contour of millions of triangles lags behind the
-/// pointer instead of freezing the window. A mesh is sent as soon as it
-/// is extracted; its measurements (topology, area, volume: several times
-/// the extraction's cost) follow when no newer request is waiting, so
-/// dragging shows new meshes at extraction speed.
-pub struct Extractor {
-    tx: Sender<Job>,
-    rx: Receiver<Done>,
-}
-
-impl std::fmt::Debug for Extractor {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("Extractor")
-    }
-}
-
-impl Extractor {
-    /// Starts the worker; `notify` is called after each answer (egui:
-    /// request a repaint).
-    pub fn new(notify: Option<Arc<dyn Fn() + Send + Sync>>) -> Self {
-        let (tx, jobs) = channel::<Job>();
-        let (done_tx, rx) = channel::<Done>();
-        let _ = std::thread::Builder::new()
-            .name("flexiso-extract".into())
-            .spawn(move || {
-                let send = |d: Done| {
-                    let ok = done_tx.send(d).is_ok();
-                    if let Some(n) = &notify {
-                        n();
-                    }
-                    ok
-                };
-                // Newest request per contour, and meshes still to measure.
-                let mut latest: HashMap<u64, Job> = HashMap::new();
-                let mut to_measure: Vec<(u64, u64, Arc<ContourMesh>)> = Vec::new();
-                // The follower's tables, kept from one job to the next.
-                let mut scratch = FollowerScratch::default();
-                loop {
-                    if latest.is_empty() && to_measure.is_empty() {
-                        match jobs.recv() {
-                            Ok(j) => {
-                                latest.insert(j.id, j);
-                            }
-                            Err(_) => return,
-                        }
-                    }
-                    while let Ok(j) = jobs.try_recv() {
-                        latest.insert(j.id, j);
-                    }
-                    if !latest.is_empty() {
-                        to_measure.retain(|(id, _, _)| !latest.contains_key(id));
-                        let mut batch: Vec<Job> = latest.drain().map(|(_, j)| j).collect();
-                        batch.sort_by_key(|j| j.id);
-                        for j in batch {
-                            let t = std::time::Instant::now();
-                            let mesh =
-                                extract_mesh(&j.field, &j.tree, j.superarc, j.h, &mut scratch)
-                                    .map(Arc::new);
-                            let ms = t.elapsed().as_secs_f64() * 1e3;
-                            let gpu = mesh.as_deref().and_then(prepare);
-                            if let Some(m) = &mesh {
-                                to_measure.push((j.id, j.request, Arc::clone(m)));
-                            }
-                            let done = Done::Mesh {
-                                id: j.id,
-                                request: j.request,
-                                mesh,
-                                gpu,
-                                ms,
-                            };
-                            if !send(done) {
-                                return;
-                            }
-                        }
-                        // New requests first: they may make these stale.
-                        continue;
-                    }
-                    if let Some((id, request, mesh)) = to_measure.pop() {
-                        let topology = MeshTopology::of(&mesh.positions, &mesh.indices);
-                        if !send(Done::Topology {
-                            id,
-                            request,
-                            topology,
-                        }) {
-                            return;
-                        }
-                    }
-                }
-            });
-        Self { tx, rx }
-    }
-}
-
 /// The selected contours and the global isovalue.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct Selection {
     /// Selected contours, in the order they were picked.
     pub contours: Vec<Contour>,
     /// The contour last picked or dragged (shown highlighted).
-    pub active: Option<u64>,
+    pub active: Option<ContourId>,
     /// Only this contour is drawn, when set.
-    pub isolated: Option<u64>,
+    pub isolated: Option<ContourId>,
     next_id: u64,
-    /// Extraction worker; without one, contours are extracted at once.
-    extractor: Option<std::rc::Rc<Extractor>>,
+    /// Extraction jobs; without them, contours are extracted at once.
+    extractions: Option<Extractions>,
 }
 
 impl Selection {
-    /// Extracts on a worker from now on (the window); without this call
-    /// every extraction happens at once on the caller's thread.
-    pub fn set_extractor(&mut self, e: Extractor) {
-        self.extractor = Some(std::rc::Rc::new(e));
+    /// Extracts in background jobs from now on (the window), whose
+    /// workers call `notify`; without this call every extraction happens
+    /// at once on the caller's thread.
+    pub fn extract_in_background(&mut self, notify: Option<Notify>) {
+        self.extractions = Some(Extractions::new(notify));
     }
 
-    /// Installs the meshes the worker has finished; true if any.
+    /// Installs the meshes the jobs have finished; true if any.
     pub fn poll(&mut self) -> bool {
-        let Some(e) = self.extractor.clone() else {
+        let Some(e) = &mut self.extractions else {
             return false;
         };
         let mut any = false;
-        while let Ok(d) = e.rx.try_recv() {
+        for d in e.poll() {
             any |= self.install(d);
         }
         any
@@ -237,19 +109,18 @@ impl Selection {
     /// Blocks until every requested extraction is installed and measured
     /// (tests).
     pub fn wait_for_extractions(&mut self) {
-        let Some(e) = self.extractor.clone() else {
-            return;
-        };
-        while self
-            .contours
-            .iter()
-            .any(|c| c.extracting() || c.measuring())
-        {
-            match e.rx.recv_timeout(std::time::Duration::from_secs(60)) {
-                Ok(d) => {
-                    self.install(d);
-                }
-                Err(_) => return,
+        loop {
+            self.poll();
+            let pending = self
+                .contours
+                .iter()
+                .any(|c| c.extracting() || c.measuring());
+            let Some(e) = &mut self.extractions else {
+                return;
+            };
+            if !pending || !e.wait_one() {
+                self.poll();
+                return;
             }
         }
     }
@@ -298,33 +169,21 @@ impl Selection {
         }
     }
 
-    /// Extracts `c` (at once, or by the worker).
-    fn request(&self, field: &Arc<ScalarField>, tree: &Arc<ContourTree>, c: &mut Contour) {
+    /// Extracts `c` (at once, or by a job).
+    fn request(&mut self, field: &Arc<ScalarField>, tree: &Arc<ContourTree>, c: &mut Contour) {
         c.requested += 1;
-        match &self.extractor {
-            Some(e) => {
-                let job = Job {
-                    id: c.id,
-                    request: c.requested,
-                    superarc: c.superarc,
-                    h: c.h,
-                    field: Arc::clone(field),
-                    tree: Arc::clone(tree),
-                };
-                if e.tx.send(job).is_err() {
-                    extract(field, tree, c);
-                }
-            }
+        match &mut self.extractions {
+            Some(e) => e.request(c.id, c.requested, field, tree, c.superarc, c.h),
             None => extract(field, tree, c),
         }
     }
     /// The contour with this id.
-    pub fn get(&self, id: u64) -> Option<&Contour> {
+    pub fn get(&self, id: ContourId) -> Option<&Contour> {
         self.contours.iter().find(|c| c.id == id)
     }
 
     /// The contour with this id, mutably.
-    pub fn get_mut(&mut self, id: u64) -> Option<&mut Contour> {
+    pub fn get_mut(&mut self, id: ContourId) -> Option<&mut Contour> {
         self.contours.iter_mut().find(|c| c.id == id)
     }
 
@@ -337,7 +196,7 @@ impl Selection {
         superarc: ArcId,
         h: f64,
         replace: bool,
-    ) -> u64 {
+    ) -> ContourId {
         if replace {
             self.clear();
         }
@@ -351,14 +210,13 @@ impl Selection {
             self.active = Some(id);
             return id;
         }
-        let id = self.next_id;
+        let id = ContourId(self.next_id);
         self.next_id += 1;
         let used: Vec<Color32> = self.contours.iter().map(|c| c.colour).collect();
-        let colour = PALETTE
-            .iter()
-            .copied()
+        let colour = (0..crate::render::PALETTE.len())
+            .map(palette)
             .find(|c| !used.contains(c))
-            .unwrap_or(PALETTE[id as usize % PALETTE.len()]);
+            .unwrap_or(palette(id.0 as usize));
         let mut c = Contour {
             id,
             group: id,
@@ -385,7 +243,7 @@ impl Selection {
         &mut self,
         field: &Arc<ScalarField>,
         tree: &Arc<ContourTree>,
-        id: u64,
+        id: ContourId,
         superarc: ArcId,
         h: f64,
     ) {
@@ -410,7 +268,7 @@ impl Selection {
         &mut self,
         field: &Arc<ScalarField>,
         tree: &Arc<ContourTree>,
-        lead: u64,
+        lead: ContourId,
         positions: &[(ArcId, f64)],
     ) {
         let Some(group) = self.get(lead).map(|c| c.group) else {
@@ -419,7 +277,7 @@ impl Selection {
         if positions.is_empty() {
             return;
         }
-        let mut members: Vec<u64> = vec![lead];
+        let mut members: Vec<ContourId> = vec![lead];
         members.extend(
             self.contours
                 .iter()
@@ -448,8 +306,11 @@ impl Selection {
     }
 
     /// Removes contour `id`.
-    pub fn remove(&mut self, id: u64) {
+    pub fn remove(&mut self, id: ContourId) {
         self.contours.retain(|c| c.id != id);
+        if let Some(e) = &mut self.extractions {
+            e.forget(id);
+        }
         if self.active == Some(id) {
             self.active = None;
         }
@@ -461,6 +322,9 @@ impl Selection {
     /// Removes every contour.
     pub fn clear(&mut self) {
         self.contours.clear();
+        if let Some(e) = &mut self.extractions {
+            e.clear();
+        }
         self.active = None;
         self.isolated = None;
     }
@@ -470,23 +334,6 @@ impl Selection {
     pub fn shown(&self, c: &Contour) -> bool {
         c.visible && self.isolated.is_none_or(|i| i == c.id)
     }
-}
-
-/// The contour of `superarc` at `h` (None when the superarc does not span
-/// h).
-fn extract_mesh(
-    field: &ScalarField,
-    tree: &ContourTree,
-    superarc: ArcId,
-    h: f64,
-    scratch: &mut FollowerScratch,
-) -> Option<ContourMesh> {
-    let iso = Isovalue::new(h);
-    let seed = path_seed(tree, field, superarc, iso)?;
-    let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
-    let mesh = follower.follow(&seed, iso);
-    *scratch = follower.into_scratch();
-    Some(mesh)
 }
 
 /// Extracts the contour of `c.superarc` at `c.h` into `c`, at once.
@@ -538,7 +385,7 @@ mod tests {
     fn the_worker_sends_the_mesh_then_its_measurements() {
         let (field, tree, arc, h) = dataset();
         let mut s = Selection::default();
-        s.set_extractor(Extractor::new(None));
+        s.extract_in_background(None);
         let id = s.add(&field, &tree, arc, h, true);
         s.wait_for_extractions();
         let c = s.get(id).expect("selected");

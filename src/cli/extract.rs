@@ -55,7 +55,7 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     pub simplify: Option<usize>,
     /// Local geometric measure that ranks leaves for --simplify.
-    #[arg(long, value_enum, default_value_t = Measure::Hypervolume)]
+    #[arg(long, value_parser = super::input::measure_parser(), default_value_t = Measure::Hypervolume)]
     pub measure: Measure,
     /// Mesh file to write: .ply (binary), .obj or .stl. Without it, only
     /// the printout.

@@ -2,15 +2,16 @@
 //! flatten [`InputArgs`] into the subcommand's `Args` and call
 //! [`InputArgs::load`].
 //!
-//! Besides files and folders, the input can name the built-in field
-//! ([`crate::field::synthetic::Synthetic`]): `synthetic` (128³),
-//! `synthetic:N` (N³), `synthetic:XxYxZ`, and `synthetic-noisy[:N]` (noise
-//! amplitude 0.05, seed 1).
+//! A thin wrapper: the flags become a library [`VolumeSource`] (a file with
+//! its [`ReadOptions`], or the built-in field: `synthetic`, `synthetic:N`,
+//! `synthetic:XxYxZ`, `synthetic-noisy[:N]`); nothing outside `cli` sees
+//! clap.
 
-use crate::field::io::{self, NanPolicy, RawLayout, ReadOptions, ScalarType, Volume};
+use crate::field::io::{NanPolicy, RawLayout, ReadOptions, ScalarType, Volume};
+use crate::field::source::{self, VolumeSource};
 use crate::field::synthetic::Synthetic;
-use anyhow::{Context, bail};
-use std::path::{Path, PathBuf};
+use crate::measure::geometric::Measure;
+use anyhow::bail;
 
 /// Byte order of a raw file.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -42,7 +43,7 @@ pub struct InputArgs {
     pub endian: Endian,
     /// What to do with NaN or infinite values: refuse the file, or replace
     /// them by the smallest or largest finite value.
-    #[arg(long, value_enum, default_value_t = NanPolicy::Error)]
+    #[arg(long, value_parser = nan_parser(), default_value_t = NanPolicy::Error)]
     pub nan: NanPolicy,
 }
 
@@ -103,70 +104,39 @@ impl InputArgs {
         })
     }
 
+    /// The volume source these arguments name (a file with its read
+    /// options, or a synthetic spec).
+    pub fn source(&self) -> anyhow::Result<VolumeSource> {
+        let options = self.read_options()?;
+        Ok(VolumeSource::parse(&self.input, options)?)
+    }
+
     /// The synthetic field this input names, if it names one.
     pub fn synthetic(&self) -> anyhow::Result<Option<Synthetic>> {
-        let s = self.input.trim();
-        let (noisy, rest) = if let Some(r) = s.strip_prefix("synthetic-noisy") {
-            (true, r)
-        } else if let Some(r) = s.strip_prefix("synthetic") {
-            (false, r)
-        } else {
-            return Ok(None);
-        };
-        // A file or folder really named "synthetic..." wins.
-        if Path::new(s).exists() {
-            return Ok(None);
-        }
-        let dims = match rest.strip_prefix(':') {
-            None if rest.is_empty() => [128; 3],
-            None => return Ok(None),
-            Some(spec) => {
-                let parts: Vec<usize> = spec
-                    .split(['x', 'X'])
-                    .map(|t| t.trim().parse())
-                    .collect::<Result<_, _>>()
-                    .with_context(|| format!("'{s}': expected synthetic:N or synthetic:XxYxZ"))?;
-                match parts.as_slice() {
-                    [n] => [*n; 3],
-                    [x, y, z] => [*x, *y, *z],
-                    _ => bail!("'{s}': expected synthetic:N or synthetic:XxYxZ"),
-                }
-            }
-        };
-        let synth = Synthetic {
-            dims,
-            ..Synthetic::default()
-        };
-        Ok(Some(if noisy {
-            synth.with_noise(0.05, 1)
-        } else {
-            synth
-        }))
+        Ok(source::synthetic_spec(&self.input)?)
     }
 
     /// Reads the volume (or generates the synthetic field).
     pub fn load(&self) -> anyhow::Result<Volume> {
-        if let Some(synth) = self.synthetic()? {
-            let path = PathBuf::from(&self.input);
-            // Same checks as a file: size limit and memory, before generating.
-            let opts = ReadOptions::default();
-            io::check_volume_size(&path, synth.dims, ScalarType::F32, &opts)?;
-            let field = synth.generate();
-            return Ok(Volume {
-                field,
-                path,
-                format: if synth.noise > 0.0 {
-                    format!("synthetic (noise {})", synth.noise)
-                } else {
-                    "synthetic".into()
-                },
-                scalar_type: ScalarType::F32,
-                warnings: Vec::new(),
-            });
-        }
-        let opts = self.read_options()?;
-        Ok(io::read_volume(Path::new(&self.input), &opts)?)
+        Ok(self.source()?.load()?)
     }
+}
+
+/// `--measure`: the measure's names as the command line spells them
+/// (`height`, `volume`, `hypervolume`), parsed by [`Measure`]'s `FromStr`.
+pub fn measure_parser() -> impl clap::builder::TypedValueParser<Value = Measure> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(Measure::ALL.map(|m| PossibleValue::new(m.name()).help(m.summary())))
+        .try_map(|s| s.parse::<Measure>())
+}
+
+/// `--nan`: `error`, `min` or `max`, parsed by [`NanPolicy`]'s `FromStr`.
+pub fn nan_parser() -> impl clap::builder::TypedValueParser<Value = NanPolicy> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(
+        NanPolicy::ALL.map(|n| PossibleValue::new(n.name()).help(n.summary())),
+    )
+    .try_map(|s| s.parse::<NanPolicy>())
 }
 
 #[cfg(test)]

@@ -5,8 +5,7 @@
 use std::path::PathBuf;
 
 use super::input::InputArgs;
-use crate::app::FlexisoApp;
-use crate::app::pipeline::Request;
+use crate::app::{FlexisoApp, Request};
 
 /// Arguments of `flexiso open`.
 #[derive(clap::Args, Debug, Default)]
@@ -40,7 +39,7 @@ fn parse_size(s: &str) -> Result<(f32, f32), String> {
 /// Runs `flexiso open`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Options that do not need the file are checked before any window.
-    args.input.read_options()?;
+    let source = args.input.source()?;
     let (w, h) = args.size.unwrap_or((1400.0, 900.0));
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -54,16 +53,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // The engine's rayon workers run below the UI thread's priority (see
     // yield_to_ui); a pool already built (never, from main) stays as it is.
     let _ = rayon::ThreadPoolBuilder::new()
-        .start_handler(|_| crate::app::pipeline::yield_to_ui())
+        .start_handler(|_| crate::app::yield_to_ui())
         .build_global();
     let frame_log = args.frame_log.clone();
     let ui_dump = args.ui_dump.clone();
-    let input = args.input;
     eframe::run_native(
         "flexiso",
         options,
         Box::new(move |cc| {
-            let mut app = FlexisoApp::new(cc, Request::Open(input));
+            let mut app = FlexisoApp::new(cc, Request::Open(source));
             if let Some(p) = &frame_log {
                 app.set_frame_log(p)?;
             }

@@ -56,18 +56,6 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((n(w)?, n(h)?))
 }
 
-/// A palette of distinct sRGB colours for the contours.
-const PALETTE: [[f32; 4]; 8] = [
-    [0.89, 0.45, 0.20, 1.0],
-    [0.30, 0.60, 0.85, 1.0],
-    [0.45, 0.75, 0.35, 1.0],
-    [0.85, 0.35, 0.55, 1.0],
-    [0.90, 0.75, 0.25, 1.0],
-    [0.55, 0.45, 0.80, 1.0],
-    [0.35, 0.75, 0.75, 1.0],
-    [0.75, 0.55, 0.40, 1.0],
-];
-
 /// A triangle mesh to draw.
 struct Surface {
     positions: Vec<[f32; 3]>,
@@ -115,16 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let triangles: usize = surfaces.iter().map(|s| s.indices.len() / 3).sum();
     eprintln!("{} contour(s), {triangles} triangles", surfaces.len());
 
-    let [nx, ny, nz] = field.dims();
-    let [sx, sy, sz] = field.spacing();
-    let bounds = (
-        [0.0f32; 3],
-        [
-            ((nx.max(1) - 1) as f64 * sx) as f32,
-            ((ny.max(1) - 1) as f64 * sy) as f32,
-            ((nz.max(1) - 1) as f64 * sz) as f32,
-        ],
-    );
+    let bounds = crate::render::grid_bounds(field.dims(), field.spacing());
     let meshes: Vec<HeadlessMesh<'_>> = surfaces
         .iter()
         .enumerate()
@@ -132,7 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             positions: &s.positions,
             normals: &s.normals,
             indices: &s.indices,
-            colour: PALETTE[i % PALETTE.len()],
+            colour: crate::render::palette_rgba(i),
         })
         .collect();
     let mut camera = Camera {

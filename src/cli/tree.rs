@@ -21,7 +21,7 @@ pub struct Args {
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
     /// Local geometric measure that ranks leaves for simplification.
-    #[arg(long, value_enum, default_value_t = Measure::Hypervolume)]
+    #[arg(long, value_parser = super::input::measure_parser(), default_value_t = Measure::Hypervolume)]
     pub measure: Measure,
     /// Simplify to at most N arcs (counted on the collapsed tree).
     #[arg(long, value_name = "N", conflicts_with = "feature_size")]

@@ -13,6 +13,7 @@
 
 pub mod io;
 mod order;
+pub mod source;
 pub mod synthetic;
 
 pub use order::vertex_order;

@@ -47,7 +47,7 @@ use crate::field::ScalarField;
 use crate::tree::{ArcId, ContourTree, NodeId};
 
 /// The local geometric measure that ranks leaves for pruning.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Measure {
     /// Persistence: the range of values levelled off.
     Height,
@@ -72,6 +72,17 @@ impl Measure {
         }
     }
 
+    /// One line on what the measure ranks by (for help texts).
+    pub fn summary(self) -> &'static str {
+        match self {
+            Measure::Height => "Persistence: the range of values levelled off",
+            Measure::Volume => "The number of vertices levelled off",
+            Measure::Hypervolume => {
+                "The sum over the levelled region of the height change, the paper's favourite for exploring data"
+            }
+        }
+    }
+
     /// up(e): the cost of pruning an arc as a lower leaf, levelling the
     /// region `below` (its lower side) up to the height `h` of its upper end.
     pub fn up_cost(self, below: &RegionSummary, h: f64) -> f64 {
@@ -90,6 +101,23 @@ impl Measure {
             Measure::Volume => above.count as f64,
             Measure::Hypervolume => above.sum - above.count as f64 * h,
         }
+    }
+}
+
+/// A name that is not a measure's.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not a measure (height, volume, hypervolume)")]
+pub struct UnknownMeasure(pub String);
+
+impl std::str::FromStr for Measure {
+    type Err = UnknownMeasure;
+
+    /// The measure [`Measure::name`] spells `s` (any case).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Measure::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| UnknownMeasure(s.to_string()))
     }
 }
 

@@ -77,6 +77,65 @@ pub use renderer::{
     COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,
 };
 
+/// A renderer mesh, named by whoever adds it (the explorer maps its
+/// contours to these; the renderer only keeps them apart).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct MeshId(pub u64);
+
+impl From<u64> for MeshId {
+    fn from(id: u64) -> Self {
+        MeshId(id)
+    }
+}
+
+/// Compares with a bare number (tests and scripts that name meshes 1, 2, …).
+impl PartialEq<u64> for MeshId {
+    fn eq(&self, other: &u64) -> bool {
+        self.0 == *other
+    }
+}
+
+impl std::fmt::Display for MeshId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// Distinct sRGB colours for contours, the same in the explorer and in
+/// `flexiso render`: contour `i` takes `PALETTE[i % PALETTE.len()]`.
+pub const PALETTE: [[u8; 3]; 10] = [
+    [228, 115, 51],
+    [77, 153, 217],
+    [115, 191, 89],
+    [217, 89, 140],
+    [230, 191, 64],
+    [140, 115, 204],
+    [89, 191, 191],
+    [191, 140, 102],
+    [170, 170, 80],
+    [200, 120, 220],
+];
+
+/// Colour `i` of [`PALETTE`] as the renderer takes it (sRGB in `[0, 1]`,
+/// opaque).
+pub fn palette_rgba(i: usize) -> [f32; 4] {
+    let [r, g, b] = PALETTE[i % PALETTE.len()];
+    [
+        f32::from(r) / 255.0,
+        f32::from(g) / 255.0,
+        f32::from(b) / 255.0,
+        1.0,
+    ]
+}
+
+/// The box a grid of `dims` samples `spacing` apart fills, in world
+/// coordinates (sample `(0, 0, 0)` at the origin): what the views draw
+/// faint and frame the camera on.
+pub fn grid_bounds(dims: [usize; 3], spacing: [f64; 3]) -> ([f32; 3], [f32; 3]) {
+    let extent = |i: usize| ((dims[i].max(1) - 1) as f64 * spacing[i]) as f32;
+    ([0.0; 3], [extent(0), extent(1), extent(2)])
+}
+
 /// What can go wrong while rendering.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -93,7 +152,7 @@ pub enum RenderError {
     #[error("mesh {id}: {reason}")]
     InvalidMesh {
         /// The mesh id.
-        id: u64,
+        id: MeshId,
         /// What is wrong with it.
         reason: String,
     },

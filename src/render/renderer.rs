@@ -6,9 +6,9 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
-use super::RenderError;
 use super::camera::Camera;
 use super::geometry::{PreparedMesh, ray_box};
+use super::{MeshId, RenderError};
 
 /// Format of the colour texture [`Renderer::render`] produces: plain
 /// (not sRGB-aware) RGBA8 holding sRGB-encoded colour, which is what egui
@@ -132,7 +132,7 @@ pub struct Renderer {
     lines: wgpu::RenderPipeline,
     frame_buffer: wgpu::Buffer,
     frame_bind: wgpu::BindGroup,
-    meshes: BTreeMap<u64, Mesh>,
+    meshes: BTreeMap<MeshId, Mesh>,
     bounds: Option<BoundsLines>,
     target: Option<Target>,
     generation: u64,
@@ -369,11 +369,12 @@ impl Renderer {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        id: u64,
+        id: impl Into<MeshId>,
         positions: &[[f32; 3]],
         normals: &[[f32; 3]],
         indices: &[u32],
     ) -> Result<(), RenderError> {
+        let id = id.into();
         let mesh = PreparedMesh::new(positions, normals, indices)
             .map_err(|reason| RenderError::InvalidMesh { id, reason })?;
         self.set_prepared_mesh(device, id, Arc::new(mesh))?;
@@ -389,9 +390,10 @@ impl Renderer {
     pub fn set_prepared_mesh(
         &mut self,
         device: &wgpu::Device,
-        id: u64,
+        id: impl Into<MeshId>,
         mesh: Arc<PreparedMesh>,
     ) -> Result<(), RenderError> {
+        let id = id.into();
         let max = device.limits().max_buffer_size;
         let vertex_bytes = mesh.vertices.len() as u64 * VERTEX_BYTES;
         let index_bytes = mesh.indices.len() as u64 * 4;
@@ -559,9 +561,9 @@ impl Renderer {
     }
 
     /// Removes mesh `id` (and its GPU buffers); false if there was none.
-    pub fn remove_mesh(&mut self, id: u64) -> bool {
+    pub fn remove_mesh(&mut self, id: impl Into<MeshId>) -> bool {
         self.scene_version += 1;
-        self.meshes.remove(&id).is_some()
+        self.meshes.remove(&id.into()).is_some()
     }
 
     /// Removes every mesh.
@@ -571,13 +573,13 @@ impl Renderer {
     }
 
     /// The ids of the meshes held, ascending.
-    pub fn mesh_ids(&self) -> Vec<u64> {
+    pub fn mesh_ids(&self) -> Vec<MeshId> {
         self.meshes.keys().copied().collect()
     }
 
     /// Whether mesh `id` is held.
-    pub fn has_mesh(&self, id: u64) -> bool {
-        self.meshes.contains_key(&id)
+    pub fn has_mesh(&self, id: impl Into<MeshId>) -> bool {
+        self.meshes.contains_key(&id.into())
     }
 
     /// Sets how mesh `id` is drawn: `colour` is sRGB in `[0, 1]` with
@@ -586,12 +588,12 @@ impl Renderer {
     /// effect) if there is no such mesh: set the mesh first.
     pub fn set_style(
         &mut self,
-        id: u64,
+        id: impl Into<MeshId>,
         colour: [f32; 4],
         visible: bool,
         highlighted: bool,
     ) -> bool {
-        let Some(mesh) = self.meshes.get_mut(&id) else {
+        let Some(mesh) = self.meshes.get_mut(&id.into()) else {
             return false;
         };
         let style = MeshStyle {
@@ -614,8 +616,8 @@ impl Renderer {
     }
 
     /// The style of mesh `id`.
-    pub fn style(&self, id: u64) -> Option<MeshStyle> {
-        self.meshes.get(&id).map(|m| m.style)
+    pub fn style(&self, id: impl Into<MeshId>) -> Option<MeshStyle> {
+        self.meshes.get(&id.into()).map(|m| m.style)
     }
 
     /// The bounding box of the visible meshes `(min, max)`, or None when
@@ -897,13 +899,13 @@ impl Renderer {
         height: f32,
         x: f32,
         y: f32,
-    ) -> Option<(u64, [f32; 3])> {
+    ) -> Option<(MeshId, [f32; 3])> {
         if !(width > 0.0 && height > 0.0 && x.is_finite() && y.is_finite()) {
             return None;
         }
         let ndc = [2.0 * x / width - 1.0, 1.0 - 2.0 * y / height];
         let (origin, dir) = camera.ray(ndc, width / height);
-        let mut candidates: Vec<(f32, u64, &Mesh)> = self
+        let mut candidates: Vec<(f32, MeshId, &Mesh)> = self
             .meshes
             .iter()
             .filter(|(_, m)| m.drawn())
@@ -912,7 +914,7 @@ impl Renderer {
             })
             .collect();
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut best: Option<(f32, u64, Vec3)> = None;
+        let mut best: Option<(f32, MeshId, Vec3)> = None;
         for (enter, id, m) in candidates {
             if best.is_some_and(|(t, _, _)| enter > t) {
                 break;

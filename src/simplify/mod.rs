@@ -30,8 +30,12 @@
 //! [`SimplifiedTree`] adds 8 bytes per arc id and 8 per node; the
 //! steps are also kept as 28-byte diffs for the level view.
 
+mod adjacency;
+pub mod branches;
 pub mod collapse;
 pub mod json;
+pub mod layout;
+mod level_set;
 
 pub use crate::measure::geometric::Measure;
 pub use collapse::CollapsedTree;
@@ -514,6 +518,8 @@ pub struct SimplifiedTree {
     arc_pos: Vec<u32>,
     /// Per node: live arcs (up, down).
     degree: Vec<(u32, u32)>,
+    /// Per node: which arcs those are ([`SimplifiedTree::arcs_above`]).
+    adjacency: adjacency::LiveAdjacency,
 }
 
 /// A live arc of a [`SimplifiedTree`], as the explorer reads it.
@@ -557,6 +563,7 @@ impl SimplifiedTree {
             arc_pos,
             degree,
             step: 0,
+            adjacency: adjacency::LiveAdjacency::new(&sim),
             sim,
         }
     }
@@ -699,6 +706,7 @@ impl SimplifiedTree {
     fn insert(&mut self, a: u32) {
         self.arc_pos[a as usize] = self.live_arcs.len() as u32;
         self.live_arcs.push(a);
+        self.adjacency.link(&self.sim, a);
     }
 
     fn remove(&mut self, a: u32) {
@@ -709,6 +717,7 @@ impl SimplifiedTree {
             self.arc_pos[moved as usize] = p;
         }
         self.arc_pos[a as usize] = NONE;
+        self.adjacency.unlink(&self.sim, a);
     }
 
     /// Puts arc `new` in the slot of live arc `old`.
@@ -718,5 +727,7 @@ impl SimplifiedTree {
         self.live_arcs[p as usize] = new;
         self.arc_pos[new as usize] = p;
         self.arc_pos[old as usize] = NONE;
+        self.adjacency.unlink(&self.sim, old);
+        self.adjacency.link(&self.sim, new);
     }
 }

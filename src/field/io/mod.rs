@@ -64,7 +64,7 @@ pub const TREE_BYTES_PER_VERTEX: u64 = 26;
 pub const CHECK_BYTES_PER_VERTEX: u64 = 30;
 
 /// What to do with NaN or infinite values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NanPolicy {
     /// Refuse the file, naming the count and the first position.
     #[default]
@@ -73,6 +73,51 @@ pub enum NanPolicy {
     Min,
     /// Replace them by the largest finite value.
     Max,
+}
+
+impl NanPolicy {
+    /// Every policy, for menus and help texts.
+    pub const ALL: [NanPolicy; 3] = [NanPolicy::Error, NanPolicy::Min, NanPolicy::Max];
+
+    /// Lower-case name, as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            NanPolicy::Error => "error",
+            NanPolicy::Min => "min",
+            NanPolicy::Max => "max",
+        }
+    }
+
+    /// One line on what the policy does.
+    pub fn summary(self) -> &'static str {
+        match self {
+            NanPolicy::Error => "Refuse the file, naming the count and the first position",
+            NanPolicy::Min => "Replace them by the smallest finite value",
+            NanPolicy::Max => "Replace them by the largest finite value",
+        }
+    }
+}
+
+/// A name that is not a NaN policy's.
+#[derive(Clone, Debug, PartialEq, Eq, Error)]
+#[error("'{0}' is not a NaN policy (error, min, max)")]
+pub struct UnknownNanPolicy(pub String);
+
+impl std::str::FromStr for NanPolicy {
+    type Err = UnknownNanPolicy;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        NanPolicy::ALL
+            .into_iter()
+            .find(|n| n.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| UnknownNanPolicy(s.to_string()))
+    }
+}
+
+impl std::fmt::Display for NanPolicy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// How to read a headerless raw file.

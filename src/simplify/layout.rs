@@ -1,34 +1,30 @@
-//! Where the tree panel draws each node: y is the node's value, x comes
-//! from a *branch decomposition* read off the whole pruning sequence, so it
-//! is computed once and stays put when the level of simplification changes.
+//! Where the explorer's tree panel draws each node: y is the node's value,
+//! x comes from the branch decomposition ([`super::branches`]) of the whole
+//! pruning sequence, so it is computed once and stays put when the level
+//! of simplification changes.
 //!
-//! Every pruning step cuts one branch: the pruned leaf's extremum, and the
-//! nodes reduced inside the pruned arc, lie on it; the arcs left at the end
-//! are root branches. A branch hangs from the branch holding its inner node
-//! (pruned later, so the hierarchy is a forest). The branches are ordered
-//! left to right by an in-order walk of that forest in which each branch
-//! has its children alternately on its right and left, the more important
-//! (pruned later) closer. Nodes take their branch's column, so the arcs
-//! along a branch are vertical and side branches slant out of them.
+//! The branches are ordered left to right by an in-order walk of the
+//! branch forest in which each branch has its children alternately on its
+//! right and left, the more important (pruned later) closer. Nodes take
+//! their branch's column, so the arcs along a branch are vertical and side
+//! branches slant out of them.
 //!
 //! At a level only the live branches (not yet pruned) get columns, in that
 //! fixed order, so the drawing is compact at every level and the relative
 //! order of nodes never changes.
 
-use crate::simplify::{Simplification, SimplifiedArcId, SimplifiedNodeId, SimplifiedTree};
+use super::branches::{BranchId, Branches};
+use super::{Simplification, SimplifiedNodeId, SimplifiedTree};
 
 const NONE: u32 = u32::MAX;
 
 /// The branch decomposition of a simplification and its column order.
 #[derive(Clone, Debug)]
 pub struct TreeLayout {
-    /// Per node: its branch.
-    node_branch: Vec<u32>,
+    /// The branches.
+    branches: Branches,
     /// Branches left to right.
     order: Vec<u32>,
-    /// Number of pruning steps: branch `k < steps` is pruned at step `k`,
-    /// the others are roots (never pruned).
-    steps: usize,
     /// Per branch: its place in `order`.
     position: Vec<u32>,
 }
@@ -36,107 +32,24 @@ pub struct TreeLayout {
 impl TreeLayout {
     /// The layout of every level of `sim`.
     pub fn new(sim: &std::sync::Arc<Simplification>) -> Self {
-        let steps = sim.steps();
-        let nsteps = steps.len();
-        let ids = sim.num_arc_ids();
-        let nodes = sim.num_nodes();
-        let mut pruned_at = vec![NONE; ids];
-        for (k, s) in steps.iter().enumerate() {
-            pruned_at[s.pruned.0 as usize] = k as u32;
-        }
-        let mut last = SimplifiedTree::new(std::sync::Arc::clone(sim));
-        last.set_step(nsteps);
-        let mut roots: Vec<u32> = last.arc_ids().to_vec();
-        roots.sort_unstable();
-        let mut root_of = vec![NONE; ids];
-        for (i, &a) in roots.iter().enumerate() {
-            root_of[a as usize] = (nsteps + i) as u32;
-        }
-        // Per arc id: the arc made from it by a reduction.
-        let mut parent = vec![NONE; ids];
-        for d in sim.base_arcs()..ids {
-            if let Some((e1, e2)) = sim.reduced_from(SimplifiedArcId(d as u32)) {
-                parent[e1.0 as usize] = d as u32;
-                parent[e2.0 as usize] = d as u32;
-            }
-        }
-        let fallback = nsteps as u32; // the first root
-        // Per arc id: the branch its interior nodes lie on. Parents have
-        // higher ids: go down from the top.
-        let mut owner = vec![fallback; ids];
-        for a in (0..ids).rev() {
-            owner[a] = if pruned_at[a] != NONE {
-                pruned_at[a]
-            } else if root_of[a] != NONE {
-                root_of[a]
-            } else if parent[a] != NONE {
-                owner[parent[a] as usize]
-            } else {
-                fallback
-            };
-        }
-        let mut node_branch = vec![NONE; nodes];
-        for (d, &o) in owner.iter().enumerate().skip(sim.base_arcs()) {
-            if let Some((e1, _)) = sim.reduced_from(SimplifiedArcId(d as u32)) {
-                node_branch[sim.lower(e1).0 as usize] = o;
-            }
-        }
-        for (k, s) in steps.iter().enumerate() {
-            let leaf = if s.lower_leaf {
-                sim.lower(s.pruned)
-            } else {
-                sim.upper(s.pruned)
-            };
-            node_branch[leaf.0 as usize] = k as u32;
-        }
-        for &a in &roots {
-            for n in [sim.upper(SimplifiedArcId(a)), sim.lower(SimplifiedArcId(a))] {
-                if node_branch[n.0 as usize] == NONE {
-                    node_branch[n.0 as usize] = root_of[a as usize];
-                }
-            }
-        }
-        for b in &mut node_branch {
-            if *b == NONE {
-                *b = fallback;
-            }
-        }
-        let branches = nsteps + roots.len().max(1);
-        // Children of each branch, most important (pruned last) first.
-        let mut children: Vec<Vec<u32>> = vec![Vec::new(); branches];
-        for (k, s) in steps.iter().enumerate().rev() {
-            let inner = if s.lower_leaf {
-                sim.upper(s.pruned)
-            } else {
-                sim.lower(s.pruned)
-            };
-            let p = node_branch[inner.0 as usize];
-            // A parent is pruned later than its child (or is a root); guard
-            // against anything else so the walk below terminates.
-            if (p as usize) > k && (p as usize) < branches {
-                children[p as usize].push(k as u32);
-            } else {
-                children[fallback as usize].push(k as u32);
-            }
-        }
+        let branches = Branches::new(sim);
+        let n = branches.len();
         enum Visit {
-            Branch(u32),
-            Emit(u32),
+            Branch(BranchId),
+            Emit(BranchId),
         }
-        let mut order = Vec::with_capacity(branches);
-        let mut stack: Vec<Visit> = (nsteps..branches)
-            .rev()
-            .map(|r| Visit::Branch(r as u32))
-            .collect();
+        let mut order = Vec::with_capacity(n);
+        let roots: Vec<BranchId> = branches.roots().collect();
+        let mut stack: Vec<Visit> = roots.into_iter().rev().map(Visit::Branch).collect();
         while let Some(v) = stack.pop() {
             match v {
-                Visit::Emit(b) => order.push(b),
+                Visit::Emit(b) => order.push(b.0),
                 Visit::Branch(b) => {
-                    let c = &children[b as usize];
+                    let c: Vec<BranchId> = branches.children(b).collect();
                     // Sequence: left children outermost..innermost, b,
                     // right children innermost..outermost; pushed reversed.
-                    let right: Vec<u32> = c.iter().step_by(2).copied().collect();
-                    let left: Vec<u32> = c.iter().skip(1).step_by(2).copied().collect();
+                    let right: Vec<BranchId> = c.iter().step_by(2).copied().collect();
+                    let left: Vec<BranchId> = c.iter().skip(1).step_by(2).copied().collect();
                     for &r in right.iter().rev() {
                         stack.push(Visit::Branch(r));
                     }
@@ -147,16 +60,20 @@ impl TreeLayout {
                 }
             }
         }
-        let mut position = vec![NONE; order.len().max(branches)];
+        let mut position = vec![NONE; order.len().max(n)];
         for (i, &b) in order.iter().enumerate() {
             position[b as usize] = i as u32;
         }
         Self {
-            node_branch,
+            branches,
             order,
-            steps: nsteps,
             position,
         }
+    }
+
+    /// The branch decomposition the layout is made from.
+    pub fn branches(&self) -> &Branches {
+        &self.branches
     }
 
     /// Writes the columns of the nodes live at `level` into `columns`
@@ -168,7 +85,7 @@ impl TreeLayout {
     pub fn live_columns(&self, level: &SimplifiedTree, columns: &mut Vec<f32>) {
         let nodes = level.nodes();
         let place = |n: SimplifiedNodeId| {
-            let b = self.node_branch[n.0 as usize];
+            let b = self.branches.of_node(n).0;
             self.position.get(b as usize).copied().unwrap_or(NONE)
         };
         let mut places: Vec<u32> = nodes.iter().map(|&n| place(n)).collect();
@@ -190,9 +107,9 @@ impl TreeLayout {
     /// (NaN for nodes of pruned branches). O(branches).
     pub fn columns(&self, level: &SimplifiedTree) -> Vec<f32> {
         let step = level.step();
-        let live = |b: u32| b as usize >= self.steps || b as usize >= step;
+        let live = |b: u32| self.branches.is_live(BranchId(b), step);
         let count = self.order.iter().filter(|&&b| live(b)).count().max(1);
-        let mut column = vec![f32::NAN; self.order.len().max(self.steps + 1)];
+        let mut column = vec![f32::NAN; self.order.len().max(self.branches.steps() + 1)];
         let mut i = 0usize;
         for &b in &self.order {
             if live(b) {
@@ -200,15 +117,12 @@ impl TreeLayout {
                 i += 1;
             }
         }
-        self.node_branch
-            .iter()
-            .map(|&b| column.get(b as usize).copied().unwrap_or(f32::NAN))
+        (0..level.simplification().num_nodes() as u32)
+            .map(|n| {
+                let b = self.branches.of_node(SimplifiedNodeId(n)).0;
+                column.get(b as usize).copied().unwrap_or(f32::NAN)
+            })
             .collect()
-    }
-
-    /// The branch a node lies on.
-    pub fn branch(&self, node: SimplifiedNodeId) -> u32 {
-        self.node_branch[node.0 as usize]
     }
 }
 

@@ -5,7 +5,7 @@
 
 use egui_plot::{GridMark, Line, Plot, PlotPoints, Points, VLine};
 
-use crate::simplify::{Simplification, SimplifiedTree};
+use crate::simplify::SimplifiedTree;
 
 /// The curve panel's state.
 pub struct CurvePanel {
@@ -35,45 +35,6 @@ impl Default for CurvePanel {
 /// frames instead of freezing one.
 pub const STEPS_PER_FRAME: usize = 50_000;
 
-/// The curve of `sim` as the panel draws it: log10 feature size against
-/// log10 arcs, decimated to [`CURVE_RESOLUTION`] (computed with the
-/// simplification, off the UI thread: a curve has a point per step).
-pub fn drawn_curve(sim: &Simplification) -> Vec<[f64; 2]> {
-    decimate(
-        sim.curve()
-            .iter()
-            .filter(|p| p.feature_size > 0.0 && p.arcs > 0)
-            .map(|p| [p.feature_size.log10(), (p.arcs as f64).log10()]),
-        CURVE_RESOLUTION,
-    )
-}
-
-/// Decades below which two points of the curve are drawn as one: a
-/// fifth of a pixel at the panel's usual size (7 decades over ~450 px).
-const CURVE_RESOLUTION: f64 = 0.003;
-
-/// The points of a polyline that are more than `eps` away (in x or y)
-/// from the last point kept, plus the last: a curve of millions of
-/// steps (one per pruned arc) becomes a few thousand points that draw
-/// the same, so the UI thread does not tessellate millions each frame.
-fn decimate(points: impl Iterator<Item = [f64; 2]>, eps: f64) -> Vec<[f64; 2]> {
-    let mut out: Vec<[f64; 2]> = Vec::new();
-    let mut last_dropped = None;
-    for p in points {
-        match out.last() {
-            Some(q) if (p[0] - q[0]).abs() <= eps && (p[1] - q[1]).abs() <= eps => {
-                last_dropped = Some(p);
-            }
-            _ => {
-                out.push(p);
-                last_dropped = None;
-            }
-        }
-    }
-    out.extend(last_dropped);
-    out
-}
-
 /// Labels the decades of a log10 axis: 0.01 0.1 1 10 100 1000, then 1e4.
 fn decade_label(mark: GridMark) -> String {
     let n = mark.value.round();
@@ -81,7 +42,7 @@ fn decade_label(mark: GridMark) -> String {
         return String::new();
     }
     if (-2.0..=3.0).contains(&n) {
-        super::tree_panel::fmt_value(10f64.powf(n))
+        crate::app::format::fmt_value(10f64.powf(n))
     } else {
         format!("1e{}", n as i64)
     }
@@ -171,7 +132,7 @@ impl CurvePanel {
             }
             ui.label(format!(
                 "feature size {}",
-                super::tree_panel::fmt_value(level.feature_size())
+                crate::app::format::fmt_value(level.feature_size())
             ));
         });
 
@@ -219,41 +180,5 @@ impl CurvePanel {
             self.approach(ui, level, t);
         }
         level.step() != before
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn decimation_keeps_the_ends_and_every_point_stays_close() {
-        // A staircase like a simplification curve: 200k steps.
-        let curve: Vec<[f64; 2]> = (1..200_000u32)
-            .map(|i| {
-                let arcs = f64::from(200_000 - i);
-                let feature = f64::from(i / 7 + 1).powf(1.3);
-                [feature.log10(), arcs.log10()]
-            })
-            .collect();
-        let eps = 0.003;
-        let kept = decimate(curve.iter().copied(), eps);
-        assert!(kept.len() < 10_000, "{} points kept", kept.len());
-        assert_eq!(kept.first(), curve.first());
-        assert_eq!(kept.last(), curve.last());
-        // Every original point lies within eps of the last point kept at
-        // or before it.
-        let mut k = 0;
-        for p in &curve {
-            while k + 1 < kept.len() && kept[k + 1] == *p {
-                k += 1;
-            }
-            if kept[k] != *p {
-                let q = kept[k];
-                assert!((p[0] - q[0]).abs() <= eps && (p[1] - q[1]).abs() <= eps);
-            }
-        }
-        assert!(decimate(std::iter::empty(), eps).is_empty());
-        assert_eq!(decimate([[1.0, 1.0]].into_iter(), eps), vec![[1.0, 1.0]]);
     }
 }

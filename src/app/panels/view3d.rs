@@ -11,13 +11,23 @@ use std::sync::Arc;
 
 use egui::{Color32, Sense};
 
-use crate::contour::ContourMesh;
-use crate::render::{Camera, EguiTexture, PreparedMesh, Renderer};
+use crate::app::ids::ContourId;
+use crate::render::{Camera, EguiTexture, MeshId, PreparedMesh, Renderer};
+
+/// What a mesh of the scene is, as the explorer names it; the view gives
+/// each its own renderer [`MeshId`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SceneKey {
+    /// A selected contour.
+    Contour(ContourId),
+    /// Component `i` of "all contours at h".
+    AtH(usize),
+}
 
 /// One mesh the view should draw.
 pub struct SceneMesh {
-    /// Renderer id.
-    pub id: u64,
+    /// What it is.
+    pub key: SceneKey,
     /// Geometry, ready for the GPU (uploaded when `version` changes).
     pub mesh: Arc<PreparedMesh>,
     /// Bumped when the geometry changes.
@@ -37,26 +47,11 @@ pub struct SceneMesh {
 /// fault per 4 KiB besides the copy.
 pub const UPLOAD_BUDGET: u64 = 8 << 20;
 
-/// `mesh` made ready for the GPU, for the threads that extract contours
-/// (a contour mesh is always well formed; None would mean a bug, logged).
-pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
-    match PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices) {
-        Ok(m) => Some(Arc::new(m)),
-        Err(e) => {
-            eprintln!(
-                "flexiso: contour of arc {:?} cannot be drawn: {e}",
-                mesh.arc
-            );
-            None
-        }
-    }
-}
-
 /// What happened in the view this frame.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ViewEvents {
-    /// A surface was clicked: its id; `shift` held.
-    pub picked: Option<(u64, bool)>,
+    /// A surface was clicked: what it is; `shift` held.
+    pub picked: Option<(SceneKey, bool)>,
     /// The background was clicked.
     pub clicked_empty: bool,
 }
@@ -68,7 +63,11 @@ pub struct View3d {
     pub camera: Camera,
     texture: EguiTexture,
     /// Mesh id → uploaded version.
-    uploaded: HashMap<u64, u64>,
+    uploaded: HashMap<MeshId, u64>,
+    /// The renderer's id of each scene mesh, and back.
+    ids: HashMap<SceneKey, MeshId>,
+    keys: HashMap<MeshId, SceneKey>,
+    next_id: u64,
     bounds: Option<([f32; 3], [f32; 3])>,
     /// Why there is no view (no wgpu, upload error), shown instead.
     pub problem: Option<String>,
@@ -98,6 +97,9 @@ impl View3d {
             camera: Camera::default(),
             texture: EguiTexture::new(),
             uploaded: HashMap::new(),
+            ids: HashMap::new(),
+            keys: HashMap::new(),
+            next_id: 0,
             bounds: None,
             problem: None,
             last_render_ms: 0.0,
@@ -115,12 +117,30 @@ impl View3d {
         }
     }
 
-    /// Ids of the meshes the renderer holds (tests).
-    pub fn mesh_ids(&self) -> Vec<u64> {
-        self.renderer
+    /// The scene meshes the renderer holds (tests), sorted.
+    pub fn mesh_ids(&self) -> Vec<SceneKey> {
+        let mut keys: Vec<SceneKey> = self
+            .renderer
             .as_ref()
             .map(|r| r.mesh_ids())
             .unwrap_or_default()
+            .iter()
+            .filter_map(|id| self.keys.get(id).copied())
+            .collect();
+        keys.sort();
+        keys
+    }
+
+    /// The renderer id of scene mesh `key`, made on first use.
+    fn mesh_id(&mut self, key: SceneKey) -> MeshId {
+        if let Some(&id) = self.ids.get(&key) {
+            return id;
+        }
+        let id = MeshId(self.next_id);
+        self.next_id += 1;
+        self.ids.insert(key, id);
+        self.keys.insert(id, key);
+        id
     }
 
     /// The renderer, once created (tests, screenshots).
@@ -149,33 +169,49 @@ impl View3d {
             );
             return events;
         };
-        let renderer = self.renderer.get_or_insert_with(|| {
+        if self.renderer.is_none() {
             let mut r = Renderer::new(&rs.device, Renderer::sample_count_for(&rs.adapter));
             if let Some((lo, hi)) = self.bounds {
                 r.set_bounds(lo, hi);
             }
-            r
-        });
+            self.renderer = Some(r);
+        }
 
         // Sync meshes: remove the gone, upload the changed, restyle all.
-        let wanted: HashMap<u64, &SceneMesh> = scene.iter().map(|m| (m.id, m)).collect();
-        for id in renderer.mesh_ids() {
-            if !wanted.contains_key(&id) {
-                renderer.remove_mesh(id);
+        let wanted: HashMap<SceneKey, &SceneMesh> = scene.iter().map(|m| (m.key, m)).collect();
+        let gone: Vec<SceneKey> = self
+            .ids
+            .keys()
+            .filter(|k| !wanted.contains_key(k))
+            .copied()
+            .collect();
+        for key in gone {
+            if let Some(id) = self.ids.remove(&key) {
+                self.keys.remove(&id);
                 self.uploaded.remove(&id);
+                if let Some(r) = &mut self.renderer {
+                    r.remove_mesh(id);
+                }
             }
         }
         for m in scene {
-            if self.uploaded.get(&m.id) != Some(&m.version) {
-                match renderer.set_prepared_mesh(&rs.device, m.id, Arc::clone(&m.mesh)) {
+            let id = self.mesh_id(m.key);
+            let Some(renderer) = &mut self.renderer else {
+                break;
+            };
+            if self.uploaded.get(&id) != Some(&m.version) {
+                match renderer.set_prepared_mesh(&rs.device, id, Arc::clone(&m.mesh)) {
                     Ok(()) => {
-                        self.uploaded.insert(m.id, m.version);
+                        self.uploaded.insert(id, m.version);
                     }
                     Err(e) => self.problem = Some(e.to_string()),
                 }
             }
-            renderer.set_style(m.id, rgba(m.colour), m.visible, m.highlighted);
+            renderer.set_style(id, rgba(m.colour), m.visible, m.highlighted);
         }
+        let Some(renderer) = &mut self.renderer else {
+            return events;
+        };
         if renderer.upload_pending(&rs.device, &rs.queue, UPLOAD_BUDGET) {
             ui.ctx().request_repaint();
         }
@@ -218,7 +254,12 @@ impl View3d {
         {
             let local = p - rect.min;
             match renderer.pick(&self.camera, rect.width(), rect.height(), local.x, local.y) {
-                Some((id, _)) => events.picked = Some((id, ui.input(|i| i.modifiers.shift))),
+                Some((id, _)) => {
+                    events.picked = self
+                        .keys
+                        .get(&id)
+                        .map(|&k| (k, ui.input(|i| i.modifiers.shift)));
+                }
                 None => events.clicked_empty = true,
             }
         }

@@ -1,5 +1,6 @@
 //! The contour tree panel: the simplified tree drawn with y = isovalue and
-//! x from the branch layout ([`super::layout`]), nodes coloured by kind,
+//! x from the library's branch layout ([`crate::simplify::layout`]), nodes
+//! coloured by kind,
 //! the global isovalue as a draggable horizontal line, one marker per
 //! selected contour that drags its isovalue along its arc.
 //!
@@ -15,10 +16,11 @@ use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2, pos2, vec2};
 
 use crate::contour::path_seed_in_chain;
 use crate::field::Isovalue;
-use crate::simplify::{SimplifiedArcId, SimplifiedTree};
+use crate::simplify::{SimplifiedArcId, SimplifiedNodeId, SimplifiedTree};
 
-use super::pipeline::Dataset;
-use super::selection::Selection;
+use crate::app::dataset::Dataset;
+use crate::app::format::{fmt_value, tick_step};
+use crate::app::selection::{ContourId, Selection};
 
 /// Node colours: maxima, minima, saddles.
 const MAX_COLOUR: Color32 = Color32::from_rgb(230, 90, 80);
@@ -30,7 +32,7 @@ const ISO_COLOUR: Color32 = Color32::from_rgb(120, 220, 160);
 /// What is being dragged.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Drag {
-    Marker(u64),
+    Marker(ContourId),
     IsoLine,
     Pan,
 }
@@ -47,7 +49,7 @@ pub struct Drawn {
     /// Screen ends (upper, lower) of each drawn arc (parallel to `arcs`).
     pub arc_ends: Vec<(Pos2, Pos2)>,
     /// Markers drawn: contour id and position.
-    pub markers: Vec<(u64, Pos2)>,
+    pub markers: Vec<(ContourId, Pos2)>,
     /// Screen y of the global isovalue line.
     pub iso_y: f32,
 }
@@ -114,32 +116,34 @@ fn segment_distance(p: Pos2, a: Pos2, b: Pos2) -> f32 {
     (a + ab * t).distance(p)
 }
 
-/// Round tick spacing for about `n` ticks over `range`.
-fn tick_step(range: f64, n: f64) -> f64 {
-    if !(range.is_finite() && range > 0.0) {
-        return 1.0;
-    }
-    let raw = range / n;
-    let mag = 10f64.powf(raw.log10().floor());
-    let r = raw / mag;
-    mag * if r < 1.5 {
-        1.0
-    } else if r < 3.5 {
-        2.0
-    } else if r < 7.5 {
-        5.0
-    } else {
-        10.0
-    }
+/// A selected contour's marker on the live arc holding it.
+#[derive(Clone, Copy)]
+struct Marker {
+    id: ContourId,
+    pos: Pos2,
+    colour: Color32,
+    arc: SimplifiedArcId,
 }
 
-/// Formats a value compactly.
-pub fn fmt_value(v: f64) -> String {
-    if v == 0.0 || (v.abs() >= 0.01 && v.abs() < 1e5) {
-        let s = format!("{v:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        format!("{v:.3e}")
+/// One frame's geometry: where every node and arc is on the screen.
+struct Frame {
+    rect: Rect,
+    plot: Rect,
+    tf: Transform,
+    /// Live arcs: id and screen ends (upper, lower), by id.
+    segs: Vec<(SimplifiedArcId, Pos2, Pos2)>,
+    markers: Vec<Marker>,
+}
+
+impl Frame {
+    /// The arc nearest to `p` within 6 points.
+    fn nearest(&self, p: Pos2) -> Option<SimplifiedArcId> {
+        self.segs
+            .iter()
+            .map(|&(id, a, b)| (segment_distance(p, a, b), id))
+            .filter(|(d, _)| *d <= 6.0)
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, id)| id)
     }
 }
 
@@ -187,8 +191,42 @@ impl TreePanel {
             .on_hover_cursor(egui::CursorIcon::Crosshair);
         response
             .widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "contour tree"));
+        let frame = self.frame(rect, ds, level, sel);
+        let pointer = response.hover_pos();
+        self.hovered = pointer.and_then(|p| frame.nearest(p));
+        self.interact(ui, &response, &frame, ds, level, sel, global_h);
+
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
+        self.draw_axis(ui, &painter, &frame);
+        let iso_y = self.draw_iso_line(&painter, &frame, *global_h);
+        self.draw_tree(&painter, &frame, level, sel);
+        draw_legend(ui, &painter, &frame);
+        if let Some(a) = self.hovered
+            && self.drag.is_none()
+        {
+            let hv = pointer.map(|p| frame.tf.value_at(p.y));
+            let tip = self.arc_tooltip(ds, level, a, hv);
+            response.clone().on_hover_text_at_pointer(tip);
+        }
+
+        let segs = &frame.segs;
+        self.drawn = Drawn {
+            rect: Some(rect),
+            arcs: segs
+                .iter()
+                .map(|&(id, a, b)| (id, a + (b - a) * 0.5))
+                .collect(),
+            arc_heights: segs.iter().map(|&(_, a, b)| (b.y - a.y).abs()).collect(),
+            arc_ends: segs.iter().map(|&(_, a, b)| (a, b)).collect(),
+            markers: frame.markers.iter().map(|m| (m.id, m.pos)).collect(),
+            iso_y,
+        };
+    }
+
+    /// Where everything is this frame: the transform, the live arcs' ends
+    /// and the markers.
+    fn frame(&self, rect: Rect, ds: &Dataset, level: &SimplifiedTree, sel: &Selection) -> Frame {
         let plot = Rect::from_min_max(rect.min + vec2(60.0, 14.0), rect.max - vec2(14.0, 14.0));
         let (lo, hi) = ds.range;
         let tf = Transform {
@@ -199,29 +237,14 @@ impl TreePanel {
             pan: self.pan,
         };
         let sim = level.simplification();
-        let node_pos = |n: crate::simplify::SimplifiedNodeId| -> Pos2 {
-            let x = self.columns.get(n.0 as usize).copied().unwrap_or(0.5);
-            tf.screen(if x.is_finite() { x } else { 0.5 }, sim.node_value(n))
-        };
-
-        // Arcs: segments and hit testing.
-        let pointer = response.hover_pos();
-        let mut segs: Vec<(SimplifiedArcId, Pos2, Pos2)> = Vec::with_capacity(level.num_arcs());
-        for a in level.arcs() {
-            segs.push((a.id, node_pos(a.upper), node_pos(a.lower)));
-        }
+        let node_pos = |n: SimplifiedNodeId| -> Pos2 { self.node_pos(&tf, level, n) };
+        let mut segs: Vec<(SimplifiedArcId, Pos2, Pos2)> = level
+            .arcs()
+            .map(|a| (a.id, node_pos(a.upper), node_pos(a.lower)))
+            .collect();
         segs.sort_by_key(|s| s.0);
-        let nearest = |p: Pos2| -> Option<SimplifiedArcId> {
-            segs.iter()
-                .map(|&(id, a, b)| (segment_distance(p, a, b), id))
-                .filter(|(d, _)| *d <= 6.0)
-                .min_by(|x, y| x.0.total_cmp(&y.0))
-                .map(|(_, id)| id)
-        };
-        self.hovered = pointer.and_then(nearest);
-
         // Markers: each selected contour on the live arc holding it.
-        let mut markers: Vec<(u64, Pos2, Color32, SimplifiedArcId)> = Vec::new();
+        let mut markers = Vec::new();
         for c in &sel.contours {
             if let Some(a) = level.live_arc_of(c.superarc) {
                 let la = level.arc(a);
@@ -232,20 +255,52 @@ impl TreePanel {
                 } else {
                     0.5
                 };
-                markers.push((c.id, pl + (pu - pl) * t, c.colour, a));
+                markers.push(Marker {
+                    id: c.id,
+                    pos: pl + (pu - pl) * t,
+                    colour: c.colour,
+                    arc: a,
+                });
             }
         }
+        Frame {
+            rect,
+            plot,
+            tf,
+            segs,
+            markers,
+        }
+    }
 
-        // Interaction.
+    fn node_pos(&self, tf: &Transform, level: &SimplifiedTree, n: SimplifiedNodeId) -> Pos2 {
+        let x = self.columns.get(n.0 as usize).copied().unwrap_or(0.5);
+        let x = if x.is_finite() { x } else { 0.5 };
+        tf.screen(x, level.simplification().node_value(n))
+    }
+
+    /// Clicks, drags (marker, iso line, pan), wheel zoom, double-click.
+    #[allow(clippy::too_many_arguments)]
+    fn interact(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        frame: &Frame,
+        ds: &Dataset,
+        level: &SimplifiedTree,
+        sel: &mut Selection,
+        global_h: &mut f64,
+    ) {
+        let tf = &frame.tf;
         let press = ui.input(|i| i.pointer.press_origin());
         if response.drag_started() {
             let by_primary = ui.input(|i| i.pointer.primary_down());
             self.drag = if !by_primary {
                 Some(Drag::Pan)
             } else if let Some(p) = press {
-                let on_marker = markers
+                let on_marker = frame
+                    .markers
                     .iter()
-                    .map(|m| (m.1.distance(p), m.0))
+                    .map(|m| (m.pos.distance(p), m.id))
                     .filter(|(d, _)| *d <= 9.0)
                     .min_by(|x, y| x.0.total_cmp(&y.0));
                 if let Some((_, id)) = on_marker {
@@ -265,10 +320,10 @@ impl TreePanel {
         {
             match self.drag {
                 Some(Drag::Marker(id)) => {
-                    self.drag_marker(ds, level, sel, id, tf.value_at(p.y));
+                    Self::drag_marker(ds, level, sel, id, tf.value_at(p.y));
                 }
                 Some(Drag::IsoLine) => {
-                    *global_h = tf.value_at(p.y).clamp(lo, hi);
+                    *global_h = tf.value_at(p.y).clamp(ds.range.0, ds.range.1);
                 }
                 Some(Drag::Pan) => self.pan += response.drag_delta(),
                 None => {}
@@ -280,11 +335,11 @@ impl TreePanel {
         if response.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0
-                && let Some(q) = pointer
+                && let Some(q) = response.hover_pos()
             {
                 let z = self.zoom;
                 let nz = (z * (0.002 * scroll).exp()).clamp(0.2, 500.0);
-                let c = plot.center();
+                let c = frame.plot.center();
                 self.pan = (q - c) - (q - c - self.pan) * (nz / z);
                 self.zoom = nz;
             }
@@ -294,13 +349,16 @@ impl TreePanel {
             self.pan = Vec2::ZERO;
         } else if response.clicked()
             && let Some(p) = response.interact_pointer_pos()
-            && let Some(arc) = nearest(p)
+            && let Some(arc) = frame.nearest(p)
         {
             let shift = ui.input(|i| i.modifiers.shift);
             Self::select_arc(ds, level, sel, arc, *global_h, !shift);
         }
+    }
 
-        // Drawing: axis, iso line, arcs, nodes, markers.
+    /// The value axis with its ticks and faint grid lines.
+    fn draw_axis(&self, ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) {
+        let (rect, plot, tf) = (frame.rect, frame.plot, &frame.tf);
         let text = ui.visuals().text_color();
         let font = egui::FontId::monospace(10.0);
         let (v_top, v_bottom) = (tf.value_at(plot.top()), tf.value_at(plot.bottom()));
@@ -334,7 +392,12 @@ impl TreePanel {
             v += step;
             guard += 1;
         }
-        let iso_y = tf.screen(0.0, *global_h).y;
+    }
+
+    /// The global isovalue as a dashed line with its value; its screen y.
+    fn draw_iso_line(&self, painter: &egui::Painter, frame: &Frame, global_h: f64) -> f32 {
+        let (rect, plot) = (frame.rect, frame.plot);
+        let iso_y = frame.tf.screen(0.0, global_h).y;
         let dash = Stroke::new(
             if self.drag == Some(Drag::IsoLine) {
                 2.0
@@ -352,16 +415,25 @@ impl TreePanel {
         painter.text(
             pos2(rect.right() - 4.0, iso_y - 2.0),
             egui::Align2::RIGHT_BOTTOM,
-            format!("h = {}", fmt_value(*global_h)),
-            font.clone(),
+            format!("h = {}", fmt_value(global_h)),
+            egui::FontId::monospace(10.0),
             ISO_COLOUR,
         );
+        iso_y
+    }
 
-        let selected_arcs: Vec<(SimplifiedArcId, Color32)> =
-            markers.iter().map(|m| (m.3, m.2)).collect();
-        for &(id, a, b) in &segs {
-            let (width, colour) = if let Some(&(_, c)) = selected_arcs.iter().find(|s| s.0 == id) {
-                (3.0, c)
+    /// Arcs (selected ones in their contour's colour), nodes by kind, and
+    /// the markers.
+    fn draw_tree(
+        &self,
+        painter: &egui::Painter,
+        frame: &Frame,
+        level: &SimplifiedTree,
+        sel: &Selection,
+    ) {
+        for &(id, a, b) in &frame.segs {
+            let (width, colour) = if let Some(m) = frame.markers.iter().find(|m| m.arc == id) {
+                (3.0, m.colour)
             } else if self.hovered == Some(id) {
                 (3.0, Color32::WHITE)
             } else {
@@ -377,87 +449,62 @@ impl TreePanel {
                     (_, 0) => MIN_COLOUR,
                     _ => SADDLE_COLOUR,
                 };
-                painter.circle_filled(node_pos(n), 3.5, colour);
+                painter.circle_filled(self.node_pos(&frame.tf, level, n), 3.5, colour);
             }
         }
-        for &(id, p, colour, _) in &markers {
-            let active = sel.active == Some(id);
+        for m in &frame.markers {
+            let active = sel.active == Some(m.id);
             painter.circle(
-                p,
+                m.pos,
                 if active { 7.0 } else { 6.0 },
-                colour,
+                m.colour,
                 Stroke::new(if active { 2.0 } else { 1.0 }, Color32::WHITE),
             );
         }
-        // Legend.
-        let mut lx = plot.left();
-        for (name, c) in [
-            ("max", MAX_COLOUR),
-            ("min", MIN_COLOUR),
-            ("saddle", SADDLE_COLOUR),
-        ] {
-            painter.circle_filled(pos2(lx, rect.top() + 7.0), 3.5, c);
-            let r = painter.text(
-                pos2(lx + 6.0, rect.top() + 7.0),
-                egui::Align2::LEFT_CENTER,
-                name,
-                font.clone(),
-                text,
-            );
-            lx = r.right() + 10.0;
-        }
+    }
 
-        if let Some(a) = self.hovered
-            && self.drag.is_none()
-        {
-            let la = level.arc(a);
-            let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
-            // Genus of the contour at the pointer's value (or the middle).
-            let hv = pointer
-                .map(|p| tf.value_at(p.y))
-                .filter(|h| *h >= vl && *h < vu)
-                .unwrap_or(0.5 * (vl + vu));
-            let genus = match &self.betti {
-                Some(b) => {
-                    let iso = Isovalue::new(hv);
-                    match path_seed_in_chain(&ds.tree, &ds.field, la.chain, iso) {
-                        Some(seed) => {
-                            let seg = b.at(seed.arc, &ds.field, iso);
-                            format!(
-                                "contour at {}: genus {}{}",
-                                fmt_value(hv),
-                                seg.genus(),
-                                if seg.closed() { ", closed" } else { ", open" }
-                            )
-                        }
-                        None => String::new(),
+    /// What the tooltip of arc `a` says: its values, costs, and the genus
+    /// of its contour at the pointer's value `hv` (or the middle).
+    fn arc_tooltip(
+        &self,
+        ds: &Dataset,
+        level: &SimplifiedTree,
+        a: SimplifiedArcId,
+        hv: Option<f64>,
+    ) -> String {
+        let sim = level.simplification();
+        let la = level.arc(a);
+        let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
+        let hv = hv
+            .filter(|h| *h >= vl && *h < vu)
+            .unwrap_or(0.5 * (vl + vu));
+        let genus = match &self.betti {
+            Some(b) => {
+                let iso = Isovalue::new(hv);
+                match path_seed_in_chain(&ds.tree, &ds.field, la.chain, iso) {
+                    Some(seed) => {
+                        let seg = b.at(seed.arc, &ds.field, iso);
+                        format!(
+                            "contour at {}: genus {}{}",
+                            fmt_value(hv),
+                            seg.genus(),
+                            if seg.closed() { ", closed" } else { ", open" }
+                        )
                     }
+                    None => String::new(),
                 }
-                None => "genus: computing…".into(),
-            };
-            let tip = format!(
-                "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\n{genus}\nclick: select its contour, shift-click: add",
-                a.0,
-                fmt_value(vl),
-                fmt_value(vu),
-                fmt_value(la.up_cost),
-                fmt_value(la.down_cost),
-                la.chain.len(),
-            );
-            response.clone().on_hover_text_at_pointer(tip);
-        }
-
-        self.drawn = Drawn {
-            rect: Some(rect),
-            arcs: segs
-                .iter()
-                .map(|&(id, a, b)| (id, a + (b - a) * 0.5))
-                .collect(),
-            arc_heights: segs.iter().map(|&(_, a, b)| (b.y - a.y).abs()).collect(),
-            arc_ends: segs.iter().map(|&(_, a, b)| (a, b)).collect(),
-            markers: markers.iter().map(|m| (m.0, m.1)).collect(),
-            iso_y,
+            }
+            None => "genus: computing…".into(),
         };
+        format!(
+            "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\n{genus}\nclick: select its contour, shift-click: add",
+            a.0,
+            fmt_value(vl),
+            fmt_value(vu),
+            fmt_value(la.up_cost),
+            fmt_value(la.down_cost),
+            la.chain.len(),
+        )
     }
 
     /// Selects the contour of live arc `arc`: at `global_h` when the arc
@@ -490,11 +537,10 @@ impl TreePanel {
     /// split); contours that meet on one arc merge. At a maximum or
     /// minimum the contour stops at the end of its arc.
     fn drag_marker(
-        &self,
         ds: &Dataset,
         level: &SimplifiedTree,
         sel: &mut Selection,
-        id: u64,
+        id: ContourId,
         v: f64,
     ) {
         let Some(group) = sel.get(id).map(|c| c.group) else {
@@ -516,7 +562,7 @@ impl TreePanel {
         let sim = level.simplification();
         let mut arcs: Vec<SimplifiedArcId> = Vec::new();
         for s in starts {
-            for a in level_set_arcs(level, s, v) {
+            for a in level.level_set_arcs(s, v) {
                 if !arcs.contains(&a) {
                     arcs.push(a);
                 }
@@ -538,47 +584,25 @@ impl TreePanel {
     }
 }
 
-/// The live arcs holding the level set at `v` reached from arc `start` by
-/// following it monotonically through the nodes in between (all arcs
-/// above an upper node, all below a lower one); an arc ending at an
-/// extremum keeps the contour at its end.
-pub fn level_set_arcs(
-    level: &SimplifiedTree,
-    start: SimplifiedArcId,
-    v: f64,
-) -> Vec<SimplifiedArcId> {
-    let sim = level.simplification();
-    let mut out = Vec::new();
-    let mut stack = vec![start];
-    while let Some(a) = stack.pop() {
-        let (u, l) = (sim.upper(a), sim.lower(a));
-        let (top, bottom) = (sim.node_value(u), sim.node_value(l));
-        let next: Vec<SimplifiedArcId> = if v >= top {
-            level
-                .arc_ids()
-                .iter()
-                .map(|&b| SimplifiedArcId(b))
-                .filter(|&b| sim.lower(b) == u)
-                .collect()
-        } else if v < bottom {
-            level
-                .arc_ids()
-                .iter()
-                .map(|&b| SimplifiedArcId(b))
-                .filter(|&b| sim.upper(b) == l)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        if next.is_empty() {
-            if !out.contains(&a) {
-                out.push(a);
-            }
-        } else {
-            let mut next = next;
-            next.sort();
-            stack.extend(next.into_iter().rev());
-        }
+/// The node colours' legend, above the plot.
+fn draw_legend(ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) {
+    let text = ui.visuals().text_color();
+    let font = egui::FontId::monospace(10.0);
+    let mut lx = frame.plot.left();
+    let y = frame.rect.top() + 7.0;
+    for (name, c) in [
+        ("max", MAX_COLOUR),
+        ("min", MIN_COLOUR),
+        ("saddle", SADDLE_COLOUR),
+    ] {
+        painter.circle_filled(pos2(lx, y), 3.5, c);
+        let r = painter.text(
+            pos2(lx + 6.0, y),
+            egui::Align2::LEFT_CENTER,
+            name,
+            font.clone(),
+            text,
+        );
+        lx = r.right() + 10.0;
     }
-    out
 }

@@ -1,0 +1,126 @@
+//! The list of selected contours: colour, visibility, isolation, removal,
+//! and each contour's measurements (triangles, area, volume, genus) as
+//! they arrive from the extraction jobs.
+
+use egui::{Color32, RichText};
+
+use crate::app::format::fmt_value;
+use crate::app::selection::Selection;
+use crate::tree::ContourTree;
+
+/// Draws the list; edits the selection (colour, visibility, isolation,
+/// removal, the active contour).
+pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTree>) {
+    ui.heading("Contours");
+    if selection.contours.is_empty() {
+        ui.label("Click an arc in the tree (shift-click adds), or a surface.");
+        ui.label("Drag a marker to move its isovalue.");
+        return;
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Clear (Esc)").clicked() {
+            selection.clear();
+        }
+        if selection.isolated.is_some() && ui.button("Show all").clicked() {
+            selection.isolated = None;
+        }
+    });
+    let mut remove = None;
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        for c in &mut selection.contours {
+            let active = selection.active == Some(c.id);
+            egui::Frame::group(ui.style())
+                .stroke(egui::Stroke::new(
+                    if active { 2.0 } else { 1.0 },
+                    if active {
+                        c.colour
+                    } else {
+                        Color32::from_gray(70)
+                    },
+                ))
+                .show(ui, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.color_edit_button_srgba(&mut c.colour);
+                        let arc = tree.map(|t| {
+                            let a = t.arc(c.superarc);
+                            format!("{}:{}", t.node(a.upper).vertex, t.node(a.lower).vertex)
+                        });
+                        if ui
+                            .selectable_label(active, format!("#{}  h = {}", c.id, fmt_value(c.h)))
+                            .on_hover_text(format!(
+                                "superarc {} (vertices upper:lower)",
+                                arc.unwrap_or_default()
+                            ))
+                            .clicked()
+                        {
+                            selection.active = Some(c.id);
+                        }
+                    });
+                    ui.horizontal(|ui| {
+                        ui.checkbox(&mut c.visible, "visible");
+                        let iso = selection.isolated == Some(c.id);
+                        if ui.selectable_label(iso, "isolate").clicked() {
+                            selection.isolated = if iso { None } else { Some(c.id) };
+                        }
+                        if ui.button("delete").clicked() {
+                            remove = Some(c.id);
+                        }
+                    });
+                    match &c.topology {
+                        Some(t) => {
+                            ui.label(format!(
+                                "{} triangles, area {}",
+                                t.triangles,
+                                fmt_value(t.area)
+                            ));
+                            ui.label(format!(
+                                "{}  genus {}{}",
+                                if t.is_closed() {
+                                    format!("volume {}", fmt_value(t.volume))
+                                } else {
+                                    format!("open ({} boundary loops)", t.boundary_loops)
+                                },
+                                t.genus(),
+                                if t.components > 1 {
+                                    format!(", {} components", t.components)
+                                } else {
+                                    String::new()
+                                }
+                            ));
+                            ui.label(
+                                RichText::new(if c.extracting() {
+                                    "extracting…".to_string()
+                                } else {
+                                    format!("extracted in {:.1} ms", c.extract_ms)
+                                })
+                                .weak(),
+                            );
+                        }
+                        None if c.extracting() => {
+                            ui.horizontal(|ui| {
+                                ui.spinner();
+                                ui.label("extracting…");
+                            });
+                        }
+                        None if c.mesh.is_some() => {
+                            let n = c.mesh.as_ref().map_or(0, |m| m.num_triangles());
+                            ui.label(format!("{n} triangles"));
+                            ui.horizontal(|ui| {
+                                ui.spinner();
+                                ui.label(format!(
+                                    "measuring… (extracted in {:.1} ms)",
+                                    c.extract_ms
+                                ));
+                            });
+                        }
+                        None => {
+                            ui.label("no contour at this value");
+                        }
+                    }
+                });
+        }
+    });
+    if let Some(id) = remove {
+        selection.remove(id);
+    }
+}
