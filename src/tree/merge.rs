@@ -88,10 +88,12 @@ pub struct CandidateTree {
 
 /// Merges the join and split trees (see the module documentation).
 /// `candidate_vertex` lists the candidates' vertices, ascending.
+/// Arrays are dropped as soon as they are used up: on white noise about
+/// half the vertices are candidates.
 pub fn merge(
     join: JoinTree,
     split: SplitTree,
-    candidate_vertex: &[u32],
+    candidate_vertex: Vec<u32>,
     progress: &Progress,
 ) -> Result<CandidateTree, Cancelled> {
     let k = candidate_vertex.len();
@@ -113,6 +115,8 @@ pub fn merge(
             });
         }
     }
+
+    drop(candidate_vertex);
 
     // Fig. 9 on the candidates; the global minimum (candidate 0) is last.
     let mut parent = vec![NONE; k];
@@ -182,7 +186,7 @@ pub fn merge(
     // increasing (for A) and decreasing (for B) with depth; each entry's
     // overwritten slot saved per depth to restore on the way back.
     let (mut inc, mut inc_len, mut dec, mut dec_len) = (Vec::new(), 0usize, Vec::new(), 0usize);
-    let mut saved: Vec<[u32; 6]> = Vec::new();
+    let mut saved: Vec<Saved> = Vec::new();
     let mut time = 0u32;
     if k > 0 {
         path.push(0);
@@ -228,12 +232,15 @@ pub fn merge(
             }
         } else {
             tout[x as usize] = time;
-            let [p, old_len, old_val, q, old_dlen, old_dval] = saved[d];
-            if old_val != NONE {
+            let Saved {
+                inc: (p, old_len, old_val),
+                dec: (q, old_dlen, old_dval),
+            } = saved[d];
+            if old_val != EMPTY {
                 inc[p as usize] = old_val;
             }
             inc_len = old_len as usize;
-            if old_dval != NONE {
+            if old_dval != EMPTY {
                 dec[q as usize] = old_dval;
             }
             dec_len = old_dlen as usize;
@@ -242,7 +249,7 @@ pub fn merge(
             next_child.pop();
         }
     }
-    drop((child, first, path, next_child, inc, dec, saved));
+    drop((child, first, path, next_child, inc, dec, saved, parent));
 
     let mut arcs: Vec<Superarc> = ends
         .iter()
@@ -266,15 +273,6 @@ pub fn merge(
     for l in label.iter_mut().filter(|l| **l != NONE) {
         *l = new_id[*l as usize];
     }
-    let candidate_place: Vec<u32> = (0..k)
-        .map(|c| {
-            if node_of[c] != NONE {
-                NODE_FLAG | node_of[c]
-            } else {
-                label[c]
-            }
-        })
-        .collect();
     let join_side: Vec<[u32; 3]> = a_of
         .iter()
         .map(|&a| {
@@ -286,11 +284,17 @@ pub fn merge(
             }
         })
         .collect();
+    drop((a_of, tout));
     let split_side: Vec<[u32; 2]> = b_of
         .iter()
-        .enumerate()
-        .map(|(c, &b)| [tin[c], if b == NONE { NONE } else { label[b as usize] }])
+        .zip(&tin)
+        .map(|(&b, &t)| [t, if b == NONE { NONE } else { label[b as usize] }])
         .collect();
+    drop((b_of, tin));
+    let mut candidate_place = node_of;
+    for (p, &l) in candidate_place.iter_mut().zip(&label) {
+        *p = if *p != NONE { NODE_FLAG | *p } else { l };
+    }
     Ok(CandidateTree {
         nodes,
         arcs,
@@ -300,49 +304,80 @@ pub fn merge(
     })
 }
 
+/// A monotone stack entry: candidate number (high half), depth (low half),
+/// so the binary search reads one contiguous array.
+type StackEntry = u64;
+
+/// An overwritten slot that was never there.
+const EMPTY: u64 = u64::MAX;
+
+/// What entering a candidate overwrote in each stack: (slot, old length,
+/// old entry), restored when it is left.
+#[derive(Clone, Copy)]
+struct Saved {
+    inc: (u32, u32, StackEntry),
+    dec: (u32, u32, StackEntry),
+}
+
 /// Entering candidate `x` (the last of `path`) in the depth-first pass:
 /// A(x) and B(x) from the monotone stacks, then x pushed on both.
 fn enter(
     x: u32,
     path: &[u32],
-    (inc, inc_len): (&mut Vec<u32>, &mut usize),
-    (dec, dec_len): (&mut Vec<u32>, &mut usize),
-    saved: &mut Vec<[u32; 6]>,
+    (inc, inc_len): (&mut Vec<StackEntry>, &mut usize),
+    (dec, dec_len): (&mut Vec<StackEntry>, &mut usize),
+    saved: &mut Vec<Saved>,
     (a_of, b_of): (&mut [u32], &mut [u32]),
 ) {
     let d = (path.len() - 1) as u32;
+    let kid = |e: StackEntry| (e >> 32) as u32;
+    let depth = |e: StackEntry| e as u32 as usize;
     // Deepest ancestor lower than x: the stack's candidates increase with
-    // depth, so those lower than x are a prefix.
-    let p = inc[..*inc_len].partition_point(|&dd| path[dd as usize] < x);
+    // depth, so those lower than x are a prefix. The parent is on top of
+    // both stacks, so one of the two searches is over at once.
+    let live = &inc[..*inc_len];
+    let p = if live.last().is_some_and(|&e| kid(e) < x) {
+        live.len()
+    } else {
+        live.partition_point(|&e| kid(e) < x)
+    };
     if p > 0 {
-        a_of[x as usize] = path[inc[p - 1] as usize + 1];
+        a_of[x as usize] = path[depth(inc[p - 1]) + 1];
     }
-    let q = dec[..*dec_len].partition_point(|&dd| path[dd as usize] > x);
+    let live = &dec[..*dec_len];
+    let q = if live.last().is_some_and(|&e| kid(e) > x) {
+        live.len()
+    } else {
+        live.partition_point(|&e| kid(e) > x)
+    };
     if q > 0 {
-        b_of[x as usize] = path[dec[q - 1] as usize + 1];
+        b_of[x as usize] = path[depth(dec[q - 1]) + 1];
     }
     // The slots overwritten, even past the live length: they may hold
     // live entries of an ancestor's stack, restored when x is left.
-    let old_val = inc.get(p).copied().unwrap_or(NONE);
-    let old_dval = dec.get(q).copied().unwrap_or(NONE);
-    saved.push([
-        p as u32,
-        *inc_len as u32,
-        old_val,
-        q as u32,
-        *dec_len as u32,
-        old_dval,
-    ]);
+    let entry = ((x as u64) << 32) | d as u64;
+    saved.push(Saved {
+        inc: (
+            p as u32,
+            *inc_len as u32,
+            inc.get(p).copied().unwrap_or(EMPTY),
+        ),
+        dec: (
+            q as u32,
+            *dec_len as u32,
+            dec.get(q).copied().unwrap_or(EMPTY),
+        ),
+    });
     if p == inc.len() {
-        inc.push(d);
+        inc.push(entry);
     } else {
-        inc[p] = d;
+        inc[p] = entry;
     }
     *inc_len = p + 1;
     if q == dec.len() {
-        dec.push(d);
+        dec.push(entry);
     } else {
-        dec[q] = d;
+        dec[q] = entry;
     }
     *dec_len = q + 1;
 }
@@ -399,7 +434,7 @@ pub fn augment(
                 };
             }
         });
-    drop(split_leafward);
+    drop((split_leafward, candidate_place, join_side, split_side));
     let vertex_arc = join_leafward;
     let is_node = |va: u32| va & NODE_FLAG != 0;
 

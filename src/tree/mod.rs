@@ -10,15 +10,17 @@
 //! each superarc in value order. [`merge`] explains the placement rule and
 //! why it replaced the per-vertex merge (kept as the tests' oracle).
 //!
-//! **Memory per vertex** (n vertices, beyond the field's own values):
-//! the sweeps peak at 23 bytes (order 4, link codes 1, per sweep 4 of
-//! union-find, 1 of rank and 4 of leafward candidate); merge and
-//! placement hold 12 (order and the two leafward arrays, the first of which
-//! becomes `vertex_arc`), then the arcs' vertex lists take the place of
-//! the second. Candidates add about 14 bytes each during the sweeps and 50
-//! during the merge: nothing on smooth fields, several bytes per vertex on
-//! white noise, where about half the vertices are candidates. The finished
-//! tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus O(supernodes).
+//! **Memory per vertex** (n vertices, beyond the field's own values): 13
+//! bytes at the peak, during the sweeps (order 4, link codes 1, and each
+//! sweep's one word per vertex, 4: the union-find lives on the
+//! candidates); merge and placement hold 12 (order and the two leafward
+//! arrays, the first of which becomes `vertex_arc`), then the arcs' vertex
+//! lists take the place of the second. Candidates add 24 bytes each during
+//! the sweeps and about 40 at the merge's peak: nothing on smooth fields
+//! (a few per cent of the vertices), but on white noise, where more than
+//! half the vertices are candidates, the peak is then 30-35 bytes per
+//! vertex. The finished tree keeps 8 bytes (`vertex_arc` and
+//! `arc_vertices`) plus O(supernodes).
 
 pub mod json;
 mod merge;
@@ -205,8 +207,7 @@ impl ContourTree {
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         let join_leafward = std::mem::take(&mut join.0.leafward);
         let split_leafward = std::mem::take(&mut split.0.leafward);
-        let merged = merge::merge(join, split, &candidate_vertex, progress)?;
-        drop(candidate_vertex);
+        let merged = merge::merge(join, split, candidate_vertex, progress)?;
         times.merge = t.elapsed();
         progress.stage("augment");
         let t = Instant::now();

@@ -23,13 +23,15 @@
 //! which is the lowest candidate of its superlevel component in the join
 //! tree (the highest of its sublevel component in the split tree). The
 //! merge ([`super::merge`]) places every such vertex on its superarc from
-//! these two numbers alone.
+//! these two numbers alone. The same word is where the sweep finds the
+//! vertex's component, so the union-find itself lives on the candidates.
 //!
 //! Candidates are numbered in the vertex order (`0` = global minimum), so
 //! comparing two candidate numbers compares heights.
 //!
-//! **Memory per vertex** while sweeping: 4 bytes of union-find, 1 of rank,
-//! 4 of leafward candidate; per candidate 5 bytes (parent, children).
+//! **Memory per vertex** while sweeping: 4 bytes (its word: candidate
+//! number or leafward candidate); per candidate 10 bytes (union-find,
+//! rank, parent, children), and 4 more in the split sweep (its vertex).
 
 use crate::field::VertexOrder;
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
@@ -58,7 +60,8 @@ pub struct SweepTree {
     /// Per vertex: `CANDIDATE | c` for candidate `c`; otherwise its
     /// leafward candidate (see the module documentation).
     pub leafward: Vec<u32>,
-    /// Per candidate: its vertex.
+    /// Per candidate: its vertex (empty in the join tree: the split tree
+    /// lists them).
     pub vertex: Vec<u32>,
 }
 
@@ -118,6 +121,13 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
 /// One sweep (descending for the join tree, ascending for the split tree).
 /// `values` gives the vertex order; testing "already swept" on it rather
 /// than on the union-find keeps the hot loop in the compact value array.
+///
+/// The union-find is over the candidates only: a vertex's one word is
+/// `CANDIDATE | c` for candidate `c`, otherwise its leafward candidate,
+/// which is in its component, so `find` starts there. A vertex that is not
+/// a candidate is never a union-find node: it costs one read of a
+/// neighbour's word, a `find` in the (on smooth fields, cache-sized)
+/// candidate forest and one write.
 fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
@@ -128,14 +138,16 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     progress: &Progress,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
-    // uf[x]: NONE before x is visited; ROOT | last candidate at a root;
-    // otherwise the parent in the union-find forest.
-    let mut uf = vec![NONE; n];
-    let mut rank = vec![0u8; n];
     let mut leafward = vec![NONE; n];
+    // uf[c]: ROOT | last candidate of the component at a root, otherwise
+    // the parent in the union-find forest.
+    let mut uf = vec![NONE; candidates];
+    let mut rank = vec![0u8; candidates];
     let mut parent = vec![NONE; candidates];
     let mut children = vec![0u8; candidates];
-    let mut vertex = vec![0u32; candidates];
+    // Only the split sweep lists the candidates' vertices (they are the
+    // same for both).
+    let mut vertex = vec![0u32; if join { 0 } else { candidates }];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
     // The candidate number of the next candidate visited.
     let mut next: u32 = if join { candidates as u32 } else { 0 };
@@ -151,7 +163,7 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
         let v = at(i);
         if i + AHEAD < n {
             let w = at(i + AHEAD);
-            mesh.prefetch_star(w, &uf);
+            mesh.prefetch_star(w, &leafward);
             if i + 2 * AHEAD < n {
                 let w2 = at(i + 2 * AHEAD) as usize;
                 prefetch(link_codes, w2);
@@ -161,10 +173,10 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
         let code = if join { full & 0xf } else { full >> 4 };
         if !is_candidate(full) {
             // One component beyond v, reached through one neighbour: v
-            // joins it and remembers its last candidate. Nothing else.
-            let r = find(&mut uf, mesh.neighbour_at(v, code));
+            // remembers its last candidate. Nothing else.
+            let u = mesh.neighbour_at(v, code);
+            let r = find(&mut uf, leafward[u as usize] & !CANDIDATE);
             leafward[v as usize] = uf[r as usize] & !ROOT;
-            uf[v as usize] = r;
             continue;
         }
         let kid = if join {
@@ -175,9 +187,11 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             next - 1
         };
         leafward[v as usize] = CANDIDATE | kid;
-        vertex[kid as usize] = v;
-        let mut root = v;
-        uf[v as usize] = ROOT | kid;
+        if !join {
+            vertex[kid as usize] = v;
+        }
+        let mut root = kid;
+        uf[kid as usize] = ROOT | kid;
         let mut merged = 0u8;
         // One representative per component of the swept part of v's link.
         reps.clear();
@@ -193,7 +207,7 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             index => reps.push(mesh.neighbour_at(v, index)),
         }
         for &u in &reps {
-            let r = find(&mut uf, u);
+            let r = find(&mut uf, leafward[u as usize] & !CANDIDATE);
             if r == root {
                 continue;
             }
@@ -202,10 +216,10 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             let last = uf[r as usize] & !ROOT;
             parent[last as usize] = kid;
             merged += 1;
-            if root == v {
+            if root == kid {
                 // v is still a singleton: hang it under r. Its rank is 0, so
                 // r's rank stays a valid bound on height without reading it.
-                uf[v as usize] = r;
+                uf[kid as usize] = r;
                 uf[r as usize] = ROOT | kid;
                 root = r;
                 continue;
