@@ -10,7 +10,7 @@ use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::field::synthetic::Synthetic;
 use flexiso::progress::Progress;
 use flexiso::tree::ContourTree;
-use flexiso::tree::sweep::{link_codes, sweep};
+use flexiso::tree::sweep::{count_candidates, join_tree, link_codes};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -40,9 +40,17 @@ fn stages(c: &mut Criterion) {
                 b.iter(|| black_box(link_codes(&mesh, v.as_slice())))
             });
             let codes = link_codes(&mesh, v.as_slice());
+            let candidates = count_candidates(&codes);
             g.bench_function("join sweep", |b| {
                 b.iter(|| {
-                    black_box(sweep(&mesh, v.as_slice(), &codes, true, &order, &Progress::new()))
+                    black_box(join_tree(
+                        &mesh,
+                        v.as_slice(),
+                        &codes,
+                        candidates,
+                        &order,
+                        &Progress::new(),
+                    ))
                 })
             });
         });

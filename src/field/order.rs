@@ -3,8 +3,9 @@
 //! Ties broken by id are what simulation of simplicity means on a grid, and
 //! every sort here is *stable over ids*, so ties come out in id order without
 //! comparing ids: counting sort for 8- and 16-bit values (O(n), one pass to
-//! count, one to place), LSD radix sort on 32-bit keys, and a comparison sort
-//! only for f64.
+//! count, one to place, both in parallel chunks), a parallel MSD radix sort
+//! on 32-bit keys (bucket by the high 16 bits, then each bucket on its own
+//! thread), and a parallel comparison sort only for f64.
 
 use super::Values;
 use rayon::prelude::*;
@@ -12,13 +13,13 @@ use rayon::prelude::*;
 /// The vertices sorted ascending by (value, id).
 pub fn vertex_order(values: &Values) -> Vec<u32> {
     match values {
-        Values::U8(v) => counting_sort(v.iter().map(|&x| x as usize), 1 << 8),
-        Values::I8(v) => counting_sort(v.iter().map(|&x| (x as i16 + 128) as usize), 1 << 8),
-        Values::U16(v) => counting_sort(v.iter().map(|&x| x as usize), 1 << 16),
-        Values::I16(v) => counting_sort(v.iter().map(|&x| (x as i32 + 32768) as usize), 1 << 16),
-        Values::U32(v) => radix_sort_u32_keys(v.iter().copied()),
-        Values::I32(v) => radix_sort_u32_keys(v.iter().map(|&x| (x as u32) ^ 0x8000_0000)),
-        Values::F32(v) => radix_sort_u32_keys(v.iter().map(|&x| f32_key(x))),
+        Values::U8(v) => counting_sort(v.len(), |i| v[i] as usize, 1 << 8),
+        Values::I8(v) => counting_sort(v.len(), |i| (v[i] as i16 + 128) as usize, 1 << 8),
+        Values::U16(v) => counting_sort(v.len(), |i| v[i] as usize, 1 << 16),
+        Values::I16(v) => counting_sort(v.len(), |i| (v[i] as i32 + 32768) as usize, 1 << 16),
+        Values::U32(v) => radix_sort_u32_keys(v.len(), |i| v[i]),
+        Values::I32(v) => radix_sort_u32_keys(v.len(), |i| (v[i] as u32) ^ 0x8000_0000),
+        Values::F32(v) => radix_sort_u32_keys(v.len(), |i| f32_key(v[i])),
         Values::F64(v) => {
             let mut ids: Vec<u32> = (0..v.len() as u32).collect();
             ids.par_sort_unstable_by(|&a, &b| {
@@ -44,49 +45,121 @@ fn f32_key(x: f32) -> u32 {
     }
 }
 
-fn counting_sort(keys: impl Iterator<Item = usize> + Clone, buckets: usize) -> Vec<u32> {
-    let mut start = vec![0u32; buckets + 1];
-    let mut n = 0usize;
-    for k in keys.clone() {
-        start[k + 1] += 1;
-        n += 1;
-    }
-    for b in 1..=buckets {
-        start[b] += start[b - 1];
-    }
+/// Sorts the ids `0..n` by a key below `buckets`, stably (ties in id
+/// order): every chunk of ids counts its keys in parallel, then writes its
+/// ids to the slots its counts reserve (each chunk's slots for a key follow
+/// those of the chunks before it, which is what keeps the sort stable).
+fn counting_sort<K>(n: usize, key: K, buckets: usize) -> Vec<u32>
+where
+    K: Fn(usize) -> usize + Sync,
+{
     let mut out = vec![0u32; n];
-    for (i, k) in keys.enumerate() {
-        let slot = &mut start[k];
-        out[*slot as usize] = i as u32;
-        *slot += 1;
-    }
+    scatter_by_key(0..n, &key, buckets, &mut out);
     out
 }
 
-/// Sorts ids by a 32-bit key with two stable 16-bit LSD passes over packed
-/// (key << 32 | id) words.
-fn radix_sort_u32_keys(keys: impl Iterator<Item = u32>) -> Vec<u32> {
-    let mut a: Vec<u64> = keys
-        .enumerate()
-        .map(|(i, k)| ((k as u64) << 32) | i as u64)
+/// Writes the ids of `range` to `out`, stably sorted by `key` (below
+/// `buckets`); returns the bucket starts (`buckets + 1` offsets into `out`).
+fn scatter_by_key<K>(
+    range: std::ops::Range<usize>,
+    key: &K,
+    buckets: usize,
+    out: &mut [u32],
+) -> Vec<usize>
+where
+    K: Fn(usize) -> usize + Sync,
+{
+    const CHUNK: usize = 1 << 20;
+    let n = range.len();
+    let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(CHUNK))
+        .map(|c| range.start + c * CHUNK..range.start + ((c + 1) * CHUNK).min(n))
         .collect();
-    let mut b = vec![0u64; a.len()];
-    for shift in [32u32, 48] {
-        let mut start = vec![0usize; (1 << 16) + 1];
-        for &w in &a {
-            start[((w >> shift) & 0xffff) as usize + 1] += 1;
+    let mut counts: Vec<Vec<u32>> = chunks
+        .par_iter()
+        .map(|r| {
+            let mut c = vec![0u32; buckets];
+            for i in r.clone() {
+                c[key(i)] += 1;
+            }
+            c
+        })
+        .collect();
+    // Exclusive prefix over (bucket, chunk): chunk c's first slot for key k.
+    let mut starts = vec![0usize; buckets + 1];
+    let mut total = 0usize;
+    for k in 0..buckets {
+        starts[k] = total;
+        for c in counts.iter_mut() {
+            let here = c[k] as usize;
+            c[k] = total as u32;
+            total += here;
         }
-        for d in 1..start.len() {
-            start[d] += start[d - 1];
-        }
-        for &w in &a {
-            let slot = &mut start[((w >> shift) & 0xffff) as usize];
-            b[*slot] = w;
-            *slot += 1;
-        }
-        std::mem::swap(&mut a, &mut b);
     }
-    a.into_iter().map(|w| w as u32).collect()
+    starts[buckets] = total;
+    debug_assert_eq!(total, n);
+    let dst = SharedOut(out.as_mut_ptr());
+    chunks
+        .into_par_iter()
+        .zip(counts.into_par_iter())
+        .for_each(|(r, mut next)| {
+            let dst = &dst;
+            for i in r {
+                let slot = &mut next[key(i)];
+                // SAFETY: the slots of different chunks and keys are
+                // disjoint ranges of `out` (the prefix sums above), each
+                // written once, and all are below `n = out.len()`.
+                unsafe { *dst.0.add(*slot as usize) = i as u32 };
+                *slot += 1;
+            }
+        });
+    starts
+}
+
+/// The output of [`scatter_by_key`], written from several threads at
+/// disjoint slots.
+struct SharedOut(*mut u32);
+// SAFETY: only used for writes to disjoint slots (see `scatter_by_key`).
+unsafe impl Sync for SharedOut {}
+
+/// Sorts ids by a 32-bit key: ids are first bucketed by the key's high 16
+/// bits (a stable parallel counting pass in id order), then each bucket is
+/// sorted by the whole key on its own thread, ties by id. Needs 4 bytes per
+/// id beyond the output, and only while a large bucket is sorted.
+fn radix_sort_u32_keys<K>(n: usize, key: K) -> Vec<u32>
+where
+    K: Fn(usize) -> u32 + Sync,
+{
+    let mut out = vec![0u32; n];
+    let starts = scatter_by_key(0..n, &|i| (key(i) >> 16) as usize, 1 << 16, &mut out);
+    let mut buckets: Vec<&mut [u32]> = Vec::with_capacity(1 << 16);
+    let mut rest = out.as_mut_slice();
+    for w in starts.windows(2) {
+        let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+        buckets.push(head);
+        rest = tail;
+    }
+    buckets.into_par_iter().for_each(|b| {
+        if b.len() < 1 << 12 {
+            // Ids ascend within a bucket; sort by (key, id).
+            b.sort_unstable_by_key(|&i| ((key(i as usize) as u64) << 32) | i as u64);
+        } else {
+            // A stable counting pass on the low 16 bits keeps id order.
+            let mut count = vec![0u32; (1 << 16) + 1];
+            for &i in b.iter() {
+                count[(key(i as usize) & 0xffff) as usize + 1] += 1;
+            }
+            for d in 1..count.len() {
+                count[d] += count[d - 1];
+            }
+            let src = b.to_vec();
+            for i in src {
+                let slot = &mut count[(key(i as usize) & 0xffff) as usize];
+                b[*slot as usize] = i;
+                *slot += 1;
+            }
+        }
+    });
+    out
 }
 
 fn fix_signed_zero_ties(v: &[f64], ids: &mut [u32]) {
@@ -133,6 +206,32 @@ mod tests {
             Values::I32(raw.iter().map(|&x| x as i32 * 100_000).collect()),
             Values::F32(raw.iter().map(|&x| x as f32 * 0.37).collect()),
             Values::F64(raw.iter().map(|&x| x as f64 * -1e-3).collect()),
+        ];
+        for values in &all {
+            assert_eq!(
+                vertex_order(values),
+                by_comparison(values),
+                "{}",
+                values.type_name()
+            );
+        }
+    }
+
+    #[test]
+    fn large_inputs_sort_across_chunks_and_big_buckets() {
+        // Three million values: several counting chunks, and float buckets
+        // (same high 16 bits) far above the small-bucket threshold.
+        let n = 3_000_000u64;
+        let mix = |i: u64| i.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+        let all = [
+            Values::U8((0..n).map(|i| mix(i) as u8).collect()),
+            Values::I16((0..n).map(|i| mix(i) as i16).collect()),
+            Values::F32(
+                (0..n)
+                    .map(|i| 1.0 + (mix(i) % 5000) as f32 * 1e-7)
+                    .collect(),
+            ),
+            Values::I32((0..n).map(|i| (mix(i) % 100_000) as i32 - 50_000).collect()),
         ];
         for values in &all {
             assert_eq!(

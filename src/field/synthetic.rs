@@ -7,6 +7,7 @@
 //! inside and an outside surface), optionally with deterministic noise.
 
 use super::{ScalarField, Values};
+use rayon::prelude::*;
 
 /// What to generate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,20 +121,25 @@ impl Synthetic {
                 0.5
             }
         };
-        let mut values = Vec::with_capacity(nx * ny * nz);
-        let mut id = 0u64;
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    let mut f = Self::value_at([scale(x, nx), scale(y, ny), scale(z, nz)]);
-                    if self.noise > 0.0 {
-                        f += self.noise * unit_noise(self.seed, id);
+        // One z-slice per task, in parallel; the noise depends only on the
+        // vertex id, so the field is the same on any number of threads.
+        let mut values = vec![0f32; nx * ny * nz];
+        values
+            .par_chunks_mut((nx * ny).max(1))
+            .enumerate()
+            .for_each(|(z, slice)| {
+                let mut id = (z * nx * ny) as u64;
+                for y in 0..ny {
+                    for x in 0..nx {
+                        let mut f = Self::value_at([scale(x, nx), scale(y, ny), scale(z, nz)]);
+                        if self.noise > 0.0 {
+                            f += self.noise * unit_noise(self.seed, id);
+                        }
+                        slice[y * nx + x] = f;
+                        id += 1;
                     }
-                    values.push(f);
-                    id += 1;
                 }
-            }
-        }
+            });
         // Finite by construction, dims nonzero and within the limit for any
         // size a caller can allocate.
         ScalarField::new(self.dims, Values::F32(values))

@@ -43,8 +43,9 @@
 //! **Memory:** 48 bytes per superarc ([`ArcRegions`]), 12 bytes per
 //! supernode while computing; nothing per vertex.
 
-use crate::field::ScalarField;
+use crate::field::{Scalar, ScalarField};
 use crate::tree::{ArcId, ContourTree, NodeId};
+use rayon::prelude::*;
 
 /// The local geometric measure that ranks leaves for pruning.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -168,12 +169,17 @@ impl ArcRegions {
         let value = |n: NodeId| field.value(tree.node(n).vertex);
         // Update for the regular vertices of each arc: count, sum, and their
         // extremes (the first and last, since they ascend).
-        let regular: Vec<(u64, f64)> = (0..m)
-            .map(|a| {
-                let vs = tree.arc_vertices(ArcId(a as u32));
-                (vs.len() as u64, vs.iter().map(|&v| field.value(v)).sum())
-            })
-            .collect();
+        // In parallel over the arcs, on the values in their own type.
+        let regular: Vec<(u64, f64)> = crate::with_values!(field.values(), values => {
+            (0..m)
+                .into_par_iter()
+                .map(|a| {
+                    let vs = tree.arc_vertices(ArcId(a as u32));
+                    let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
+                    (vs.len() as u64, sum)
+                })
+                .collect()
+        });
         let (total_count, total_sum) = {
             let s: f64 = regular.iter().map(|r| r.1).sum::<f64>()
                 + nodes.iter().map(|n| field.value(n.vertex)).sum::<f64>();

@@ -71,7 +71,10 @@ impl CollapsedTree {
     /// As [`CollapsedTree::new`], with the regions already computed.
     pub fn with_regions(tree: &ContourTree, field: &ScalarField, regions: &ArcRegions) -> Self {
         let nodes = tree.nodes();
-        let value = |n: NodeId| field.value(tree.node(n).vertex);
+        // Each node's value read once: the arcs below visit nodes in no
+        // order, and the values array is far larger than the cache.
+        let node_values: Vec<f64> = nodes.iter().map(|n| field.value(n.vertex)).collect();
+        let value = |n: NodeId| node_values[n.0 as usize];
         // Union-find on supernodes; the root of a class is its smallest
         // node, i.e. its lowest in the vertex order.
         let mut uf: Vec<u32> = (0..nodes.len() as u32).collect();

@@ -173,117 +173,28 @@ impl Simplification {
     pub fn from_collapsed(base: &CollapsedTree, measure: Measure) -> Self {
         let m = base.num_arcs();
         let n = base.num_nodes();
-        let cap = 2 * m;
-        let mut upper = Vec::with_capacity(cap);
-        let mut lower = Vec::with_capacity(cap);
-        let mut up_cost = Vec::with_capacity(cap);
-        let mut down_cost = Vec::with_capacity(cap);
         let node_value: Vec<f64> = (0..n as u32).map(|v| base.node_value(v)).collect();
         let node_vertex: Vec<u32> = (0..n as u32).map(|v| base.node_vertex(v)).collect();
-        for a in 0..m as u32 {
-            let (u, l) = base.arc(a);
-            upper.push(u);
-            lower.push(l);
-            up_cost.push(measure.up_cost(base.below(a), node_value[u as usize]));
-            down_cost.push(measure.down_cost(base.above(a), node_value[l as usize]));
-        }
-        // Live adjacency: counts and the XOR of the live arc ids up and
-        // down; a node with one arc in a direction finds it in O(1).
-        let mut n_up = vec![0u32; n];
-        let mut n_down = vec![0u32; n];
-        let mut x_up = vec![0u32; n];
-        let mut x_down = vec![0u32; n];
-        for a in 0..m {
-            n_up[lower[a] as usize] += 1;
-            x_up[lower[a] as usize] ^= a as u32;
-            n_down[upper[a] as usize] += 1;
-            x_down[upper[a] as usize] ^= a as u32;
-        }
-        let degree = |n_up: &[u32], n_down: &[u32], v: u32| n_up[v as usize] + n_down[v as usize];
-        let mut alive = vec![true; m];
-        let mut parts: Vec<(u32, u32)> = Vec::new();
-        let mut heap = BinaryHeap::with_capacity(m);
-        // The queue holds leaf arcs with the cost of their direction.
-        let enqueue = |heap: &mut BinaryHeap<Entry>,
-                       n_up: &[u32],
-                       n_down: &[u32],
-                       a: u32,
-                       upper: &[u32],
-                       lower: &[u32],
-                       up_cost: &[f64],
-                       down_cost: &[f64]| {
-            let (lo, hi) = (lower[a as usize], upper[a as usize]);
-            let (lo_leaf, hi_leaf) = (degree(n_up, n_down, lo) == 1, degree(n_up, n_down, hi) == 1);
-            if lo_leaf && !hi_leaf {
-                heap.push(Entry {
-                    cost: up_cost[a as usize],
-                    arc: a,
-                });
-            } else if hi_leaf && !lo_leaf {
-                heap.push(Entry {
-                    cost: down_cost[a as usize],
-                    arc: a,
-                });
-            }
-        };
-        for a in 0..m as u32 {
-            enqueue(
-                &mut heap, &n_up, &n_down, a, &upper, &lower, &up_cost, &down_cost,
-            );
-        }
+        let mut tree = Pruning::new(base, measure, &node_value);
+        let mut queue =
+            PruningQueue::new((0..m as u32).filter_map(|a| tree.leaf_entry(a)).collect());
         let mut steps = Vec::new();
-        while let Some(Entry { cost, arc: a }) = heap.pop() {
-            if !alive[a as usize] {
-                continue; // lazy deletion: reduced away since queued
-            }
-            let (hi, lo) = (upper[a as usize], lower[a as usize]);
-            let lower_leaf = degree(&n_up, &n_down, lo) == 1;
-            let upper_leaf = degree(&n_up, &n_down, hi) == 1;
-            if lower_leaf == upper_leaf {
-                continue; // the last arc of the tree
-            }
-            // Rule 3: never the last arc down (up) of the node it hangs from.
-            let s = if lower_leaf { hi } else { lo };
-            if (lower_leaf && n_down[s as usize] == 1) || (upper_leaf && n_up[s as usize] == 1) {
+        while let Some(Entry { cost, arc: a }) = queue.pop() {
+            let Some((s, lower_leaf)) = tree.prunable(a) else {
                 continue;
-            }
-            // Prune.
-            alive[a as usize] = false;
-            n_up[lo as usize] -= 1;
-            x_up[lo as usize] ^= a;
-            n_down[hi as usize] -= 1;
-            x_down[hi as usize] ^= a;
+            };
+            tree.leaf_prune(a);
             let mut reduced = None;
-            if n_up[s as usize] == 1 && n_down[s as usize] == 1 {
+            if tree.n_up[s as usize] == 1 && tree.n_down[s as usize] == 1 {
                 // Rule 1: vertex reduction.
-                let (e1, e2) = (x_up[s as usize], x_down[s as usize]);
-                let d = upper.len() as u32;
-                let (u, l) = (upper[e1 as usize], lower[e2 as usize]);
-                upper.push(u);
-                lower.push(l);
-                up_cost.push(up_cost[e1 as usize]);
-                down_cost.push(down_cost[e2 as usize]);
-                parts.push((e1, e2));
-                alive[e1 as usize] = false;
-                alive[e2 as usize] = false;
-                alive.push(true);
-                n_up[s as usize] = 0;
-                n_down[s as usize] = 0;
-                x_up[s as usize] = 0;
-                x_down[s as usize] = 0;
-                x_down[u as usize] ^= e1 ^ d;
-                x_up[l as usize] ^= e2 ^ d;
-                enqueue(
-                    &mut heap, &n_up, &n_down, d, &upper, &lower, &up_cost, &down_cost,
-                );
+                let d = tree.vertex_reduction(s);
+                queue.extend(tree.leaf_entry(d));
                 reduced = Some(SimplifiedArcId(d));
-            } else if degree(&n_up, &n_down, s) == 1 {
+            } else if tree.degree(s) == 1 {
                 // A node with arcs in one direction only (a collapsed
                 // plateau) has become a leaf.
-                let r = x_up[s as usize] ^ x_down[s as usize];
-                enqueue(
-                    &mut heap, &n_up, &n_down, r, &upper, &lower, &up_cost, &down_cost,
-                );
+                let r = tree.x_up[s as usize] ^ tree.x_down[s as usize];
+                queue.extend(tree.leaf_entry(r));
             }
             steps.push(Step {
                 pruned: SimplifiedArcId(a),
@@ -292,6 +203,15 @@ impl Simplification {
                 reduced,
             });
         }
+        let Pruning {
+            upper,
+            lower,
+            up_cost,
+            down_cost,
+            alive,
+            parts,
+            ..
+        } = tree;
         let mut curve = Vec::with_capacity(steps.len() + 1);
         let (mut arcs, mut feature) = (m, 0.0f64);
         curve.push(CurvePoint {
@@ -458,6 +378,182 @@ impl Simplification {
         self.curve
             .partition_point(|p| p.feature_size <= feature_size)
             .saturating_sub(1)
+    }
+}
+
+/// The tree as the pruning sequence changes it (paper §3.3): arcs are only
+/// created, never changed; the live adjacency of a node is its number of
+/// live arcs up and down and the XOR of their ids, so a node with one arc
+/// in a direction finds it in O(1).
+struct Pruning {
+    upper: Vec<u32>,
+    lower: Vec<u32>,
+    up_cost: Vec<f64>,
+    down_cost: Vec<f64>,
+    n_up: Vec<u32>,
+    n_down: Vec<u32>,
+    x_up: Vec<u32>,
+    x_down: Vec<u32>,
+    alive: Vec<bool>,
+    /// Per arc made by reduction: (e1, e2), the arcs above and below.
+    parts: Vec<(u32, u32)>,
+}
+
+impl Pruning {
+    fn new(base: &CollapsedTree, measure: Measure, node_value: &[f64]) -> Self {
+        let m = base.num_arcs();
+        let n = base.num_nodes();
+        let cap = 2 * m;
+        let mut t = Self {
+            upper: Vec::with_capacity(cap),
+            lower: Vec::with_capacity(cap),
+            up_cost: Vec::with_capacity(cap),
+            down_cost: Vec::with_capacity(cap),
+            n_up: vec![0; n],
+            n_down: vec![0; n],
+            x_up: vec![0; n],
+            x_down: vec![0; n],
+            alive: vec![true; m],
+            parts: Vec::new(),
+        };
+        for a in 0..m as u32 {
+            let (u, l) = base.arc(a);
+            t.upper.push(u);
+            t.lower.push(l);
+            t.up_cost
+                .push(measure.up_cost(base.below(a), node_value[u as usize]));
+            t.down_cost
+                .push(measure.down_cost(base.above(a), node_value[l as usize]));
+            t.n_up[l as usize] += 1;
+            t.x_up[l as usize] ^= a;
+            t.n_down[u as usize] += 1;
+            t.x_down[u as usize] ^= a;
+        }
+        t
+    }
+
+    fn degree(&self, v: u32) -> u32 {
+        self.n_up[v as usize] + self.n_down[v as usize]
+    }
+
+    /// The queue entry of arc `a` if it is a leaf: a lower leaf costs
+    /// up(a), an upper leaf down(a) (rule 2).
+    fn leaf_entry(&self, a: u32) -> Option<Entry> {
+        let (lo, hi) = (self.lower[a as usize], self.upper[a as usize]);
+        match (self.degree(lo) == 1, self.degree(hi) == 1) {
+            (true, false) => Some(Entry {
+                cost: self.up_cost[a as usize],
+                arc: a,
+            }),
+            (false, true) => Some(Entry {
+                cost: self.down_cost[a as usize],
+                arc: a,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Whether the popped arc `a` may be pruned now: alive (entries are
+    /// deleted lazily), a leaf but not the last arc, and not the last arc
+    /// down (up) of the node it hangs from (rule 3). Returns that node and
+    /// whether `a` is a lower leaf.
+    fn prunable(&self, a: u32) -> Option<(u32, bool)> {
+        if !self.alive[a as usize] {
+            return None;
+        }
+        let (hi, lo) = (self.upper[a as usize], self.lower[a as usize]);
+        let lower_leaf = self.degree(lo) == 1;
+        let upper_leaf = self.degree(hi) == 1;
+        if lower_leaf == upper_leaf {
+            return None;
+        }
+        let s = if lower_leaf { hi } else { lo };
+        if (lower_leaf && self.n_down[s as usize] == 1)
+            || (upper_leaf && self.n_up[s as usize] == 1)
+        {
+            return None;
+        }
+        Some((s, lower_leaf))
+    }
+
+    /// Leaf pruning: arc `a` leaves the tree with its leaf node.
+    fn leaf_prune(&mut self, a: u32) {
+        let (hi, lo) = (self.upper[a as usize], self.lower[a as usize]);
+        self.alive[a as usize] = false;
+        self.n_up[lo as usize] -= 1;
+        self.x_up[lo as usize] ^= a;
+        self.n_down[hi as usize] -= 1;
+        self.x_down[hi as usize] ^= a;
+    }
+
+    /// Vertex reduction of node `s`, left with one arc `e1` up and one
+    /// `e2` down: they become one new arc `d` with up(d) = up(e1) and
+    /// down(d) = down(e2). Returns `d`.
+    fn vertex_reduction(&mut self, s: u32) -> u32 {
+        let si = s as usize;
+        let (e1, e2) = (self.x_up[si], self.x_down[si]);
+        let d = self.upper.len() as u32;
+        let (u, l) = (self.upper[e1 as usize], self.lower[e2 as usize]);
+        self.upper.push(u);
+        self.lower.push(l);
+        self.up_cost.push(self.up_cost[e1 as usize]);
+        self.down_cost.push(self.down_cost[e2 as usize]);
+        self.parts.push((e1, e2));
+        self.alive[e1 as usize] = false;
+        self.alive[e2 as usize] = false;
+        self.alive.push(true);
+        self.n_up[si] = 0;
+        self.n_down[si] = 0;
+        self.x_up[si] = 0;
+        self.x_down[si] = 0;
+        self.x_down[u as usize] ^= e1 ^ d;
+        self.x_up[l as usize] ^= e2 ^ d;
+        d
+    }
+}
+
+/// The priority queue of leaves, cheapest first, ties by arc id. Most
+/// entries are the leaves of the starting tree: they are sorted once (in
+/// parallel) and read in order, so only the entries added during the
+/// sequence (arcs made by reduction, plateau nodes turned leaves) go
+/// through a binary heap. On trees of millions of arcs this replaces a
+/// heap of millions of entries, whose every pop is a chain of cache misses,
+/// by a sequential read; the entries popped, hence the sequence, are the
+/// same as from one heap holding them all.
+struct PruningQueue {
+    sorted: Vec<Entry>,
+    next: usize,
+    heap: BinaryHeap<Entry>,
+}
+
+impl PruningQueue {
+    fn new(mut initial: Vec<Entry>) -> Self {
+        use rayon::prelude::*;
+        // `Entry`'s order is reversed for `BinaryHeap`: sorting by it
+        // descending gives the cheapest first.
+        initial.par_sort_unstable_by(|a, b| b.cmp(a));
+        Self {
+            sorted: initial,
+            next: 0,
+            heap: BinaryHeap::new(),
+        }
+    }
+
+    fn pop(&mut self) -> Option<Entry> {
+        match (self.sorted.get(self.next), self.heap.peek()) {
+            (Some(s), Some(h)) if h > s => self.heap.pop(),
+            (Some(&s), _) => {
+                self.next += 1;
+                Some(s)
+            }
+            (None, _) => self.heap.pop(),
+        }
+    }
+}
+
+impl Extend<Entry> for PruningQueue {
+    fn extend<I: IntoIterator<Item = Entry>>(&mut self, entries: I) {
+        self.heap.extend(entries);
     }
 }
 
@@ -729,5 +825,177 @@ impl SimplifiedTree {
         self.arc_pos[old as usize] = NONE;
         self.adjacency.unlink(&self.sim, old);
         self.adjacency.link(&self.sim, new);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{ScalarField, Values};
+    use crate::progress::Progress;
+    use proptest::prelude::*;
+
+    /// The pruning sequence as flexiso computed it before [`PruningQueue`]:
+    /// every leaf in one binary heap.
+    fn steps_with_one_heap(base: &CollapsedTree, measure: Measure) -> Vec<Step> {
+        let m = base.num_arcs();
+        let n = base.num_nodes();
+        let cap = 2 * m;
+        let mut upper = Vec::with_capacity(cap);
+        let mut lower = Vec::with_capacity(cap);
+        let mut up_cost = Vec::with_capacity(cap);
+        let mut down_cost = Vec::with_capacity(cap);
+        let node_value: Vec<f64> = (0..n as u32).map(|v| base.node_value(v)).collect();
+        for a in 0..m as u32 {
+            let (u, l) = base.arc(a);
+            upper.push(u);
+            lower.push(l);
+            up_cost.push(measure.up_cost(base.below(a), node_value[u as usize]));
+            down_cost.push(measure.down_cost(base.above(a), node_value[l as usize]));
+        }
+        // Live adjacency: counts and the XOR of the live arc ids up and
+        // down; a node with one arc in a direction finds it in O(1).
+        let mut n_up = vec![0u32; n];
+        let mut n_down = vec![0u32; n];
+        let mut x_up = vec![0u32; n];
+        let mut x_down = vec![0u32; n];
+        for a in 0..m {
+            n_up[lower[a] as usize] += 1;
+            x_up[lower[a] as usize] ^= a as u32;
+            n_down[upper[a] as usize] += 1;
+            x_down[upper[a] as usize] ^= a as u32;
+        }
+        let degree = |n_up: &[u32], n_down: &[u32], v: u32| n_up[v as usize] + n_down[v as usize];
+        let mut alive = vec![true; m];
+        let mut parts: Vec<(u32, u32)> = Vec::new();
+        let mut heap = BinaryHeap::with_capacity(m);
+        // The queue holds leaf arcs with the cost of their direction.
+        let enqueue = |heap: &mut BinaryHeap<Entry>,
+                       n_up: &[u32],
+                       n_down: &[u32],
+                       a: u32,
+                       upper: &[u32],
+                       lower: &[u32],
+                       up_cost: &[f64],
+                       down_cost: &[f64]| {
+            let (lo, hi) = (lower[a as usize], upper[a as usize]);
+            let (lo_leaf, hi_leaf) = (degree(n_up, n_down, lo) == 1, degree(n_up, n_down, hi) == 1);
+            if lo_leaf && !hi_leaf {
+                heap.push(Entry {
+                    cost: up_cost[a as usize],
+                    arc: a,
+                });
+            } else if hi_leaf && !lo_leaf {
+                heap.push(Entry {
+                    cost: down_cost[a as usize],
+                    arc: a,
+                });
+            }
+        };
+        for a in 0..m as u32 {
+            enqueue(
+                &mut heap, &n_up, &n_down, a, &upper, &lower, &up_cost, &down_cost,
+            );
+        }
+        let mut steps = Vec::new();
+        while let Some(Entry { cost, arc: a }) = heap.pop() {
+            if !alive[a as usize] {
+                continue; // lazy deletion: reduced away since queued
+            }
+            let (hi, lo) = (upper[a as usize], lower[a as usize]);
+            let lower_leaf = degree(&n_up, &n_down, lo) == 1;
+            let upper_leaf = degree(&n_up, &n_down, hi) == 1;
+            if lower_leaf == upper_leaf {
+                continue; // the last arc of the tree
+            }
+            // Rule 3: never the last arc down (up) of the node it hangs from.
+            let s = if lower_leaf { hi } else { lo };
+            if (lower_leaf && n_down[s as usize] == 1) || (upper_leaf && n_up[s as usize] == 1) {
+                continue;
+            }
+            // Prune.
+            alive[a as usize] = false;
+            n_up[lo as usize] -= 1;
+            x_up[lo as usize] ^= a;
+            n_down[hi as usize] -= 1;
+            x_down[hi as usize] ^= a;
+            let mut reduced = None;
+            if n_up[s as usize] == 1 && n_down[s as usize] == 1 {
+                // Rule 1: vertex reduction.
+                let (e1, e2) = (x_up[s as usize], x_down[s as usize]);
+                let d = upper.len() as u32;
+                let (u, l) = (upper[e1 as usize], lower[e2 as usize]);
+                upper.push(u);
+                lower.push(l);
+                up_cost.push(up_cost[e1 as usize]);
+                down_cost.push(down_cost[e2 as usize]);
+                parts.push((e1, e2));
+                alive[e1 as usize] = false;
+                alive[e2 as usize] = false;
+                alive.push(true);
+                n_up[s as usize] = 0;
+                n_down[s as usize] = 0;
+                x_up[s as usize] = 0;
+                x_down[s as usize] = 0;
+                x_down[u as usize] ^= e1 ^ d;
+                x_up[l as usize] ^= e2 ^ d;
+                enqueue(
+                    &mut heap, &n_up, &n_down, d, &upper, &lower, &up_cost, &down_cost,
+                );
+                reduced = Some(SimplifiedArcId(d));
+            } else if degree(&n_up, &n_down, s) == 1 {
+                // A node with arcs in one direction only (a collapsed
+                // plateau) has become a leaf.
+                let r = x_up[s as usize] ^ x_down[s as usize];
+                enqueue(
+                    &mut heap, &n_up, &n_down, r, &upper, &lower, &up_cost, &down_cost,
+                );
+            }
+            steps.push(Step {
+                pruned: SimplifiedArcId(a),
+                lower_leaf,
+                cost,
+                reduced,
+            });
+        }
+        steps
+    }
+
+    fn grid(levels: u8, max: usize) -> impl Strategy<Value = ScalarField> {
+        (1..=max, 1..=max, 1..=max, 1..=levels).prop_flat_map(|(x, y, z, l)| {
+            proptest::collection::vec(0..l, x * y * z)
+                .prop_map(move |v| ScalarField::new([x, y, z], Values::U8(v)).expect("field"))
+        })
+    }
+
+    fn same_sequence(field: &ScalarField) {
+        let (tree, _) = ContourTree::from_field(field, &Progress::new()).expect("tree");
+        let base = CollapsedTree::new(&tree, field);
+        for measure in Measure::ALL {
+            let sim = Simplification::from_collapsed(&base, measure);
+            assert_eq!(
+                sim.steps(),
+                steps_with_one_heap(&base, measure).as_slice(),
+                "{measure}"
+            );
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        #[test]
+        fn pruning_queue_gives_the_one_heap_sequence_on_random_grids(field in grid(8, 7)) {
+            same_sequence(&field);
+        }
+    }
+
+    #[test]
+    fn pruning_queue_gives_the_one_heap_sequence_on_a_noisy_scene() {
+        same_sequence(
+            &crate::field::synthetic::Synthetic::cube(24)
+                .with_noise(0.05, 3)
+                .generate(),
+        );
     }
 }
