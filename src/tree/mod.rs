@@ -13,6 +13,7 @@
 
 pub mod json;
 mod merge;
+pub mod raichel_seshadhri;
 pub mod sweep;
 
 use crate::field::{ScalarField, VertexOrder};
