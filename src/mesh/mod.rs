@@ -250,6 +250,25 @@ impl FreudenthalGrid {
     pub fn directions(&self) -> &[[i64; 3]] {
         &self.directions
     }
+
+    /// Bit mask over [`Self::directions`] of the neighbours that exist at `v`.
+    #[inline]
+    pub fn present_directions(&self, v: u32) -> u32 {
+        self.present(v)
+    }
+
+    /// The connected components of a part of a vertex's link given as a bit
+    /// mask over [`Self::directions`]: calls `f` with the direction index of
+    /// one neighbour per component and returns the number of components.
+    /// For engines that classify links from their own comparisons.
+    #[inline]
+    pub fn link_components(&self, mask: u32, mut f: impl FnMut(u8)) -> u32 {
+        let entry = self.link.entries[mask as usize];
+        for c in 0..(entry & 0xf) {
+            f(((entry >> (4 + 4 * c)) & 0xf) as u8);
+        }
+        (entry & 0xf) as u32
+    }
 }
 
 impl FreudenthalGrid {

@@ -24,6 +24,7 @@
 
 pub mod json;
 mod merge;
+pub mod raichel_seshadhri;
 pub mod sweep;
 #[cfg(test)]
 mod vertex_merge;

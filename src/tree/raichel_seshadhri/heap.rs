@@ -1,0 +1,132 @@
+//! Pairing heaps (Fredman, Sedgewick, Sleator, Tarjan) in one arena: the
+//! mergeable max-heaps T(c) of §6.1. Raichel and Seshadhri use binomial
+//! heaps; a pairing heap has the same interface (meld, find-max,
+//! delete-max) with meld in one comparison and delete-max in amortised
+//! O(log n) comparisons, which is all the bound of Lemma 33 needs.
+//!
+//! Entries are indices into the arena; a heap is named by its root entry
+//! (`NONE` for the empty heap). Each entry holds a vertex, its first child
+//! and its next sibling: 12 bytes per entry.
+
+use crate::field::VertexOrder;
+
+/// No entry.
+pub const NONE: u32 = u32::MAX;
+
+/// The arena of all heaps.
+pub struct PairingHeaps {
+    vertex: Vec<u32>,
+    child: Vec<u32>,
+    sibling: Vec<u32>,
+    scratch: Vec<u32>,
+}
+
+impl PairingHeaps {
+    /// An empty arena with room for `capacity` entries.
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            vertex: Vec::with_capacity(capacity),
+            child: Vec::with_capacity(capacity),
+            sibling: Vec::with_capacity(capacity),
+            scratch: Vec::new(),
+        }
+    }
+
+    /// A new one-entry heap holding vertex `v`.
+    pub fn singleton(&mut self, v: u32) -> u32 {
+        let e = self.vertex.len() as u32;
+        self.vertex.push(v);
+        self.child.push(NONE);
+        self.sibling.push(NONE);
+        e
+    }
+
+    /// The vertex at a heap's root (its highest), or `None` when empty.
+    #[inline]
+    pub fn top(&self, root: u32) -> Option<u32> {
+        (root != NONE).then(|| self.vertex[root as usize])
+    }
+
+    /// Melds two heaps (one comparison) and returns the root.
+    #[inline]
+    pub fn meld<O: VertexOrder + ?Sized>(&mut self, a: u32, b: u32, order: &O) -> u32 {
+        if a == NONE {
+            return b;
+        }
+        if b == NONE {
+            return a;
+        }
+        let (a, b) = if order.above(self.vertex[b as usize], self.vertex[a as usize]) {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        // b becomes a's first child; a root's own sibling link is unused.
+        self.sibling[b as usize] = self.child[a as usize];
+        self.child[a as usize] = b;
+        a
+    }
+
+    /// Deletes the root and returns the new root: the children are melded in
+    /// pairs left to right, then the pairs right to left (two-pass).
+    pub fn pop<O: VertexOrder + ?Sized>(&mut self, root: u32, order: &O) -> u32 {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.clear();
+        let mut c = self.child[root as usize];
+        self.child[root as usize] = NONE;
+        while c != NONE {
+            let d = self.sibling[c as usize];
+            if d == NONE {
+                scratch.push(c);
+                break;
+            }
+            let next = self.sibling[d as usize];
+            let m = self.meld(c, d, order);
+            scratch.push(m);
+            c = next;
+        }
+        let mut acc = NONE;
+        while let Some(h) = scratch.pop() {
+            acc = self.meld(h, acc, order);
+        }
+        self.scratch = scratch;
+        acc
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn melded_heaps_pop_in_descending_order() {
+        let values: Vec<u32> = (0..200).map(|i| (i * 7919) % 211).collect();
+        let order = values.as_slice();
+        let mut heaps = PairingHeaps::with_capacity(200);
+        // Ten heaps of twenty, melded together one by one.
+        let mut roots = vec![NONE; 10];
+        for v in 0..200u32 {
+            let e = heaps.singleton(v);
+            let r = &mut roots[v as usize % 10];
+            *r = heaps.meld(*r, e, order);
+        }
+        let mut all = NONE;
+        for r in roots {
+            all = heaps.meld(all, r, order);
+        }
+        let mut popped = Vec::new();
+        while let Some(v) = heaps.top(all) {
+            popped.push(v);
+            all = heaps.pop(all, order);
+        }
+        let mut expected: Vec<u32> = (0..200).collect();
+        expected.sort_by(|&a, &b| {
+            if order.above(a, b) {
+                std::cmp::Ordering::Less
+            } else {
+                std::cmp::Ordering::Greater
+            }
+        });
+        assert_eq!(popped, expected);
+    }
+}

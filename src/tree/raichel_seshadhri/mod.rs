@@ -1,0 +1,670 @@
+//! The contour tree without the global sort (Raichel, Seshadhri: "Avoiding
+//! the global sort: a faster contour tree algorithm", SoCG 2016).
+//!
+//! Every other engine, ours included ([`ContourTree::build`]), starts by
+//! sorting all n vertices. This one never does: it compares values only
+//! between vertices adjacent in the mesh, or on one monotone path of the
+//! tree, and produces the *same* augmented [`ContourTree`] (same supernodes,
+//! superarcs, superarc of every vertex, regular vertices of each arc in
+//! value order).
+//!
+//! # Pipeline
+//! 1. **Links** (§2, Definition 7). Each mesh edge is compared once
+//!    (7 comparisons per vertex in 3D): a 14-bit mask per vertex of its
+//!    upper neighbours, the rest of its link being the lower ones. The
+//!    grid's link table ([`FreudenthalGrid::link_components`]) turns a mask
+//!    into the components of the upper and lower link; a vertex is
+//!    *critical* unless both are one component.
+//! 2. **Painting** (§6, [`paint`]): the join tree restricted to the critical
+//!    vertices from the maxima down, with mergeable heaps ([`heap`]), and
+//!    the split tree the same way under the inverted order
+//!    ([`count::Inverted`]); both at once on two threads.
+//! 3. **Merge** (Carr, Snoeyink, Axen §4, on the critical vertices only):
+//!    leaf cutting is driven by the degrees alone and compares no values.
+//!    Critical vertices whose superlevel and sublevel components turn out to
+//!    be single (two link components that meet further away) are regular
+//!    and are contracted into the superarcs.
+//! 4. **Numbering**: [`ContourTree`] numbers its supernodes in the vertex
+//!    order, so the t supernodes (not the n vertices) are sorted: t log t
+//!    comparisons that the paper does not make and the data type asks for.
+//! 5. **Locating** every regular vertex on its superarc. Climb from v to an
+//!    upper neighbour, u. The mesh edge (v, u) maps to a monotone path of the
+//!    tree, and the descent from v (following lower neighbours) to a minimum
+//!    m' maps to a monotone path from v down to m'. So v's superarc lies on
+//!    the tree path from u's place down towards m', and it is the first arc
+//!    on that path whose lower end is below v. Vertices are placed after the
+//!    neighbour they climb to, so each walks from its upper neighbour's arc:
+//!    one comparison per vertex plus one per supernode crossed, each with a
+//!    supernode on the vertex's own monotone path (an ancestor or
+//!    descendant in the augmented tree). The way down at a node towards m'
+//!    is chosen by Euler-tour intervals of the tree rooted at the global
+//!    minimum, without comparisons.
+//! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
+//!    k_a regular vertices. The paper computes the unaugmented tree and has
+//!    no such term; it is the price of the augmented one.
+//!
+//! # What differs from the paper, and why
+//! - **Raining and surgery (§3-§5) are replaced by the merge.** The paper
+//!   cuts the mesh along contours into extremum-dominant pieces whose
+//!   contour tree is their join tree (Theorem 21), so that painting's heaps
+//!   only ever hold vertices of one monotone path of the *contour* tree.
+//!   Cutting a face of the Freudenthal grid along a contour makes new
+//!   vertices and faces that the implicit grid cannot hold, and the pieces
+//!   would need their own explicit meshes. We paint the whole mesh twice,
+//!   for the join and the split tree, and merge them; the merge compares no
+//!   values, so the comparisons are those of painting the join tree and the
+//!   split tree of the whole mesh. The bound of Lemma 33 then holds with the
+//!   join and split trees' paths in place of the contour tree's: the same
+//!   as the paper's when they are as short as the contour tree, larger
+//!   when the join or split tree has a long tail where the contour tree is
+//!   balanced (the paper's Figure 2), which is exactly what raining fixes.
+//! - **Binomial heaps are pairing heaps** (same operations, same bounds
+//!   amortised).
+//! - **The ripe-colour sublist L** (§6.1) is not kept; ripeness is checked
+//!   by looking at every upper neighbour's colour again (at most 14 union-
+//!   find lookups, no comparisons).
+//! - **Augmentation** (steps 4-6) is ours: the paper stops at supernodes and
+//!   superarcs.
+//!
+//! # Memory per vertex
+//! 4 bytes of masks, 4 of critical index, 4 of descent minimum, 4 of place
+//! (the tree's `vertex_arc`), and during painting 8 per orientation (paint
+//! and BFS queue, both orientations at once): about 32 bytes at the peak,
+//! plus O(t) for the critical vertices.
+
+pub mod count;
+pub mod families;
+pub mod heap;
+pub mod paint;
+
+use super::merge::NODE_FLAG;
+use super::{ContourTree, Node, NodeId, Superarc};
+use crate::field::ScalarField;
+use crate::mesh::{FreudenthalGrid, Mesh};
+use crate::progress::{Cancelled, Progress};
+use count::{Counted, CountingOrder, Inverted};
+use paint::{CriticalTree, NONE, Orientation};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Seconds per stage of [`build`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Times {
+    /// Upper/lower masks and link classification.
+    pub links: Duration,
+    /// Painting the join tree (in parallel with the split tree).
+    pub join: Duration,
+    /// Painting the split tree.
+    pub split: Duration,
+    /// Both paintings, wall clock.
+    pub paint: Duration,
+    /// Merging the critical join and split trees, contracting superarcs.
+    pub merge: Duration,
+    /// Sorting the supernodes for their numbering.
+    pub number: Duration,
+    /// Locating every regular vertex on its superarc.
+    pub locate: Duration,
+    /// Sorting the regular vertices of each superarc.
+    pub arc_sort: Duration,
+}
+
+impl Times {
+    /// Wall-clock total.
+    pub fn total(&self) -> Duration {
+        self.links + self.paint + self.merge + self.number + self.locate + self.arc_sort
+    }
+}
+
+/// Value comparisons per stage of [`build`] (all zero unless the order
+/// counts, see [`count::Counted`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Comparisons {
+    /// One per mesh edge.
+    pub links: u64,
+    /// Both paintings' heap operations.
+    pub paint: u64,
+    /// Sorting the supernodes.
+    pub number: u64,
+    /// Locating the regular vertices.
+    pub locate: u64,
+    /// Sorting each superarc's regular vertices.
+    pub arc_sort: u64,
+}
+
+impl Comparisons {
+    /// The contour tree itself (supernodes and superarcs): links and painting.
+    pub fn tree(&self) -> u64 {
+        self.links + self.paint
+    }
+
+    /// Everything, up to the augmented tree in our numbering.
+    pub fn total(&self) -> u64 {
+        self.links + self.paint + self.number + self.locate + self.arc_sort
+    }
+}
+
+/// What [`build`] measured.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Stats {
+    /// Time per stage.
+    pub times: Times,
+    /// Comparisons per stage.
+    pub comparisons: Comparisons,
+    /// Vertices whose link is critical (painting's nodes).
+    pub critical: usize,
+}
+
+/// The contour tree of a grid field; with `count`, the comparisons too (at
+/// the cost of an atomic add per comparison: time it without).
+pub fn from_field(
+    field: &ScalarField,
+    count: bool,
+    progress: &Progress,
+) -> Result<(ContourTree, Stats), Cancelled> {
+    let grid = field.mesh();
+    crate::with_values!(field.values(), v => {
+        if count {
+            build(&grid, &Counted::new(v.as_slice()), progress)
+        } else {
+            build(&grid, v.as_slice(), progress)
+        }
+    })
+}
+
+#[inline(always)]
+fn step(v: u32, offsets: &[i64], k: u32) -> u32 {
+    (v as i64 + offsets[k as usize]) as u32
+}
+
+/// Builds the augmented contour tree of `values` on the Freudenthal grid
+/// without sorting the vertices (see the module doc).
+pub fn build<O: CountingOrder + ?Sized>(
+    grid: &FreudenthalGrid,
+    values: &O,
+    progress: &Progress,
+) -> Result<(ContourTree, Stats), Cancelled> {
+    let n = grid.num_vertices();
+    let mut stats = Stats::default();
+    if n == 0 {
+        return Ok((
+            ContourTree::assemble(Vec::new(), Vec::new(), Vec::new(), vec![0], Vec::new()),
+            stats,
+        ));
+    }
+    let [sx, sy] = [1i64, grid.dims()[0] as i64];
+    let sz = sy * grid.dims()[1] as i64;
+    let offsets: Vec<i64> = grid
+        .directions()
+        .iter()
+        .map(|d| d[0] * sx + d[1] * sy + d[2] * sz)
+        .collect();
+    let half = offsets.len() / 2;
+
+    // 1. Links: each edge compared once, from its lower-id end (directions
+    // come in pairs +o, -o; the even ones have positive offsets).
+    progress.stage("links");
+    let t0 = Instant::now();
+    let c0 = values.comparisons();
+    const CHUNK: usize = 1 << 16;
+    let mut pos = vec![0u8; n];
+    pos.par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            for (i, p) in chunk.iter_mut().enumerate() {
+                let v = (c * CHUNK + i) as u32;
+                let present = grid.present_directions(v);
+                let mut bits = 0u8;
+                for j in 0..half {
+                    if present & (1 << (2 * j)) != 0
+                        && values.above(step(v, &offsets, 2 * j as u32), v)
+                    {
+                        bits |= 1 << j;
+                    }
+                }
+                *p = bits;
+            }
+        });
+    let mut upper = vec![0u16; n];
+    let mut lower = vec![0u16; n];
+    upper
+        .par_chunks_mut(CHUNK)
+        .zip(lower.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(c, (up, low))| {
+            for i in 0..up.len() {
+                let v = (c * CHUNK + i) as u32;
+                let present = grid.present_directions(v);
+                let mut u = 0u16;
+                for j in 0..half {
+                    if pos[v as usize] & (1 << j) != 0 {
+                        u |= 1 << (2 * j);
+                    }
+                    let odd = 2 * j + 1;
+                    if present & (1 << odd) != 0 {
+                        let w = step(v, &offsets, odd as u32);
+                        // w + o_j = v: v is above w unless w's bit says so.
+                        if pos[w as usize] & (1 << j) == 0 {
+                            u |= 1 << odd;
+                        }
+                    }
+                }
+                up[i] = u;
+                low[i] = present as u16 & !u;
+            }
+        });
+    drop(pos);
+    let is_critical = |v: usize| {
+        grid.link_components(upper[v] as u32, |_| {}) != 1
+            || grid.link_components(lower[v] as u32, |_| {}) != 1
+    };
+    let critical: Vec<u32> = (0..n as u32)
+        .into_par_iter()
+        .filter(|&v| is_critical(v as usize))
+        .collect();
+    let t = critical.len();
+    let mut slot = vec![NONE; n];
+    for (i, &v) in critical.iter().enumerate() {
+        slot[v as usize] = i as u32;
+    }
+    stats.critical = t;
+    stats.times.links = t0.elapsed();
+    stats.comparisons.links = values.comparisons() - c0;
+
+    // 2. Painting, join and split trees at once.
+    progress.stage("painting");
+    let t0 = Instant::now();
+    let c0 = values.comparisons();
+    let join_side = Orientation {
+        grid,
+        offsets: &offsets,
+        upper: &upper,
+        lower: &lower,
+        critical: &critical,
+        slot: &slot,
+    };
+    let split_side = Orientation {
+        upper: &lower,
+        lower: &upper,
+        ..join_side
+    };
+    let inverted = Inverted(values);
+    let (join, split) = rayon::join(
+        || {
+            let t = Instant::now();
+            paint::critical_join_tree(&join_side, values, progress).map(|j| (j, t.elapsed()))
+        },
+        || {
+            let t = Instant::now();
+            paint::critical_join_tree(&split_side, &inverted, &Progress::new())
+                .map(|s| (s, t.elapsed()))
+        },
+    );
+    let ((join, tj), (split, ts)) = (join?, split?);
+    progress.check(0, 1)?;
+    stats.times.join = tj;
+    stats.times.split = ts;
+    stats.times.paint = t0.elapsed();
+    stats.comparisons.paint = values.comparisons() - c0;
+
+    // 3. Merge on the critical vertices, then contract.
+    progress.stage("merge");
+    let t0 = Instant::now();
+    let (up_degree, down_degree) = (join.children.clone(), split.children.clone());
+    let next = merge(join, split);
+    // Tree adjacency over critical indices: up neighbours, then down.
+    let mut adj_off = vec![0u32; t + 1];
+    for i in 0..t {
+        adj_off[i + 1] = adj_off[i] + up_degree[i] + down_degree[i];
+    }
+    let mut fill_up: Vec<u32> = adj_off[..t].to_vec();
+    let mut fill_down: Vec<u32> = (0..t).map(|i| adj_off[i] + up_degree[i]).collect();
+    let mut adj = vec![NONE; adj_off[t] as usize];
+    for (x, &nx) in next.iter().enumerate() {
+        if nx == NONE {
+            continue;
+        }
+        let y = (nx & !ABOVE) as usize;
+        let (hi, lo) = if nx & ABOVE != 0 { (x, y) } else { (y, x) };
+        adj[fill_down[hi] as usize] = lo as u32;
+        fill_down[hi] += 1;
+        adj[fill_up[lo] as usize] = hi as u32;
+        fill_up[lo] += 1;
+    }
+    drop((fill_up, fill_down, next));
+    let is_node = |i: usize| up_degree[i] != 1 || down_degree[i] != 1;
+    stats.times.merge = t0.elapsed();
+
+    // 4. Number the supernodes in the vertex order.
+    let t0 = Instant::now();
+    let c0 = values.comparisons();
+    let mut node_crit: Vec<u32> = (0..t as u32).filter(|&i| is_node(i as usize)).collect();
+    node_crit.par_sort_unstable_by(|&a, &b| {
+        if values.above(critical[a as usize], critical[b as usize]) {
+            std::cmp::Ordering::Greater
+        } else {
+            std::cmp::Ordering::Less
+        }
+    });
+    let mut node_of = vec![NONE; t];
+    let nodes: Vec<Node> = node_crit
+        .iter()
+        .enumerate()
+        .map(|(id, &i)| {
+            node_of[i as usize] = id as u32;
+            Node {
+                vertex: critical[i as usize],
+                up: up_degree[i as usize],
+                down: down_degree[i as usize],
+            }
+        })
+        .collect();
+    stats.times.number = t0.elapsed();
+    stats.comparisons.number = values.comparisons() - c0;
+
+    // Superarcs: from each node down every chain of contracted vertices.
+    let t0 = Instant::now();
+    let mut place = vec![NONE; n];
+    for (id, node) in nodes.iter().enumerate() {
+        place[node.vertex as usize] = NODE_FLAG | id as u32;
+    }
+    let mut arcs: Vec<Superarc> = Vec::new();
+    for (id, &i) in node_crit.iter().enumerate() {
+        let i = i as usize;
+        let down = &adj[(adj_off[i] + up_degree[i]) as usize..adj_off[i + 1] as usize];
+        for &q in down {
+            let a = arcs.len() as u32;
+            let mut q = q as usize;
+            while !is_node(q) {
+                place[critical[q] as usize] = a;
+                // A contracted vertex has one down neighbour.
+                q = adj[(adj_off[q] + up_degree[q]) as usize] as usize;
+            }
+            arcs.push(Superarc {
+                upper: NodeId(id as u32),
+                lower: NodeId(node_of[q]),
+            });
+        }
+    }
+    drop((adj, adj_off, node_crit, node_of));
+    stats.times.merge += t0.elapsed();
+
+    // 5. Locate the regular vertices.
+    progress.stage("augment");
+    let t0 = Instant::now();
+    let c0 = values.comparisons();
+    let walk = SuperarcWalk::new(&nodes, &arcs);
+    // The minimum each vertex descends to, as a node id.
+    let mut min_of = vec![NONE; n];
+    let mut chain: Vec<u32> = Vec::new();
+    for v in 0..n as u32 {
+        if min_of[v as usize] != NONE {
+            continue;
+        }
+        let mut x = v;
+        while min_of[x as usize] == NONE && lower[x as usize] != 0 {
+            chain.push(x);
+            x = step(x, &offsets, (lower[x as usize] as u32).trailing_zeros());
+        }
+        let m = if min_of[x as usize] != NONE {
+            min_of[x as usize]
+        } else {
+            place[x as usize] & !NODE_FLAG
+        };
+        min_of[x as usize] = m;
+        for &y in &chain {
+            min_of[y as usize] = m;
+        }
+        chain.clear();
+    }
+    for v in 0..n as u32 {
+        if v as usize % (1 << 20) == 0 {
+            progress.check(v as usize, n)?;
+        }
+        if place[v as usize] != NONE {
+            continue;
+        }
+        let mut x = v;
+        while place[x as usize] == NONE {
+            chain.push(x);
+            x = step(x, &offsets, (upper[x as usize] as u32).trailing_zeros());
+        }
+        let mut from = place[x as usize];
+        while let Some(y) = chain.pop() {
+            let m = min_of[y as usize];
+            let mut arc = if from & NODE_FLAG != 0 {
+                walk.down_towards(from & !NODE_FLAG, m)
+            } else {
+                from
+            };
+            loop {
+                let lower_end = arcs[arc as usize].lower.0;
+                if values.above(y, nodes[lower_end as usize].vertex) {
+                    break;
+                }
+                arc = walk.down_towards(lower_end, m);
+            }
+            place[y as usize] = arc;
+            from = arc;
+        }
+    }
+    drop(min_of);
+    stats.times.locate = t0.elapsed();
+    stats.comparisons.locate = values.comparisons() - c0;
+
+    // 6. The regular vertices of each arc, sorted by value.
+    let t0 = Instant::now();
+    let c0 = values.comparisons();
+    let mut offsets_arc = vec![0u32; arcs.len() + 1];
+    for &p in &place {
+        if p & NODE_FLAG == 0 {
+            offsets_arc[p as usize + 1] += 1;
+        }
+    }
+    for a in 1..offsets_arc.len() {
+        offsets_arc[a] += offsets_arc[a - 1];
+    }
+    let mut fill = offsets_arc.clone();
+    let mut arc_vertices = vec![0u32; offsets_arc[arcs.len()] as usize];
+    for (v, &p) in place.iter().enumerate() {
+        if p & NODE_FLAG == 0 {
+            arc_vertices[fill[p as usize] as usize] = v as u32;
+            fill[p as usize] += 1;
+        }
+    }
+    drop(fill);
+    let mut slices: Vec<&mut [u32]> = Vec::with_capacity(arcs.len());
+    let mut rest = arc_vertices.as_mut_slice();
+    for a in 0..arcs.len() {
+        let (s, r) = rest.split_at_mut((offsets_arc[a + 1] - offsets_arc[a]) as usize);
+        slices.push(s);
+        rest = r;
+    }
+    slices.into_par_iter().for_each(|s| {
+        s.sort_unstable_by(|&a, &b| {
+            if values.above(a, b) {
+                std::cmp::Ordering::Greater
+            } else {
+                std::cmp::Ordering::Less
+            }
+        })
+    });
+    stats.times.arc_sort = t0.elapsed();
+    stats.comparisons.arc_sort = values.comparisons() - c0;
+    let tree = ContourTree::assemble(nodes, arcs, place, offsets_arc, arc_vertices);
+    Ok((tree, stats))
+}
+
+/// Marks `next[x]` when x lies above its neighbour.
+const ABOVE: u32 = 1 << 31;
+
+/// Carr, Snoeyink, Axen's leaf cutting on the critical join and split
+/// trees (the same as the engine's merge, on t vertices instead of n):
+/// every critical vertex but the global minimum gets its contour tree
+/// neighbour `next[x]`, with [`ABOVE`] when x is the upper end. No values
+/// are compared: which vertex is a leaf follows from the degrees alone.
+fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
+    let CriticalTree {
+        parent: mut jp,
+        children: mut jc,
+    } = join;
+    let CriticalTree {
+        parent: mut sp,
+        children: mut sc,
+    } = split;
+    let t = jp.len();
+    let mut next = vec![NONE; t];
+    if t <= 1 {
+        return next;
+    }
+    let global_min = jp.iter().position(|&p| p == NONE).unwrap_or(0);
+    let mut cut = vec![false; t];
+    let mut leaves: Vec<u32> = (0..t as u32)
+        .filter(|&v| v as usize != global_min && jc[v as usize] + sc[v as usize] == 1)
+        .collect();
+    let live = |parent: &mut [u32], cut: &[bool], start: u32| {
+        let mut y = start;
+        while cut[y as usize] {
+            y = parent[y as usize];
+        }
+        let mut c = start;
+        while c != y {
+            let nx = parent[c as usize];
+            parent[c as usize] = y;
+            c = nx;
+        }
+        y
+    };
+    while let Some(x) = leaves.pop() {
+        let xi = x as usize;
+        let y = if jc[xi] == 0 {
+            let start = jp[xi];
+            let y = live(&mut jp, &cut, start);
+            next[xi] = y | ABOVE;
+            jc[y as usize] -= 1;
+            y
+        } else {
+            let start = sp[xi];
+            let y = live(&mut sp, &cut, start);
+            next[xi] = y;
+            sc[y as usize] -= 1;
+            y
+        };
+        cut[xi] = true;
+        let yi = y as usize;
+        if yi != global_min && jc[yi] + sc[yi] == 1 {
+            leaves.push(y);
+        }
+    }
+    next
+}
+
+/// The superarc tree rooted at the global minimum, with Euler-tour
+/// intervals, to choose at a node the down arc that leads towards a given
+/// minimum without comparing values.
+struct SuperarcWalk {
+    /// Per node, its down arcs.
+    down_off: Vec<u32>,
+    down: Vec<u32>,
+    /// Per arc, its lower node.
+    lower: Vec<u32>,
+    /// Parent node in the rooted tree.
+    parent: Vec<u32>,
+    tin: Vec<u32>,
+    tout: Vec<u32>,
+}
+
+impl SuperarcWalk {
+    fn new(nodes: &[Node], arcs: &[Superarc]) -> Self {
+        let k = nodes.len();
+        let mut down_off = vec![0u32; k + 1];
+        let mut deg = vec![0u32; k + 1];
+        for a in arcs {
+            down_off[a.upper.0 as usize + 1] += 1;
+            deg[a.upper.0 as usize] += 1;
+            deg[a.lower.0 as usize] += 1;
+        }
+        for i in 1..=k {
+            down_off[i] += down_off[i - 1];
+        }
+        let mut fill = down_off.clone();
+        let mut down = vec![0u32; arcs.len()];
+        // Undirected adjacency for the rooting.
+        let mut adj_off = vec![0u32; k + 1];
+        for i in 0..k {
+            adj_off[i + 1] = adj_off[i] + deg[i];
+        }
+        let mut adj_fill = adj_off.clone();
+        let mut adj = vec![0u32; 2 * arcs.len()];
+        for (i, a) in arcs.iter().enumerate() {
+            let (u, l) = (a.upper.0 as usize, a.lower.0 as usize);
+            down[fill[u] as usize] = i as u32;
+            fill[u] += 1;
+            adj[adj_fill[u] as usize] = l as u32;
+            adj_fill[u] += 1;
+            adj[adj_fill[l] as usize] = u as u32;
+            adj_fill[l] += 1;
+        }
+        let lower = arcs.iter().map(|a| a.lower.0).collect();
+        // Nodes are in vertex order: node 0 is the global minimum.
+        let mut parent = vec![NONE; k];
+        let mut tin = vec![0u32; k];
+        let mut tout = vec![0u32; k];
+        if k > 0 {
+            let mut clock = 0u32;
+            let mut stack: Vec<(u32, u32)> = vec![(0, adj_off[0])];
+            tin[0] = clock;
+            clock += 1;
+            while let Some(top) = stack.len().checked_sub(1) {
+                let (v, e) = stack[top];
+                if e < adj_off[v as usize + 1] {
+                    let w = adj[e as usize];
+                    stack[top].1 += 1;
+                    if w != parent[v as usize] {
+                        parent[w as usize] = v;
+                        tin[w as usize] = clock;
+                        clock += 1;
+                        stack.push((w, adj_off[w as usize]));
+                    }
+                } else {
+                    tout[v as usize] = clock;
+                    stack.pop();
+                }
+            }
+        }
+        Self {
+            down_off,
+            down,
+            lower,
+            parent,
+            tin,
+            tout,
+        }
+    }
+
+    #[inline]
+    fn in_subtree(&self, x: u32, root: u32) -> bool {
+        let (x, r) = (x as usize, root as usize);
+        self.tin[r] <= self.tin[x] && self.tin[x] < self.tout[r]
+    }
+
+    /// The down arc of node `p` on the tree path from `p` to node `m`
+    /// (which lies below it on a monotone path).
+    #[inline]
+    fn down_towards(&self, p: u32, m: u32) -> u32 {
+        let arcs =
+            &self.down[self.down_off[p as usize] as usize..self.down_off[p as usize + 1] as usize];
+        for &a in arcs {
+            let q = self.lower[a as usize];
+            let toward = if q == self.parent[p as usize] {
+                !self.in_subtree(m, p)
+            } else {
+                self.in_subtree(m, q)
+            };
+            if toward {
+                return a;
+            }
+        }
+        // Unreachable on a correct tree; any arc keeps the walk finite.
+        arcs[0]
+    }
+}
