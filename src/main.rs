@@ -9,6 +9,10 @@ use flexiso::cli;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Print nothing but errors (and the product, where it goes to
+    /// standard output).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -27,8 +31,27 @@ enum Command {
     Bench(cli::bench::Args),
 }
 
+/// Where the explorer cannot open a window, what to do instead.
+const NO_DISPLAY: &str = "no display to open the explorer's window on (neither DISPLAY nor \
+WAYLAND_DISPLAY is set). Without a window use the headless commands: flexiso info FILE, \
+flexiso tree FILE --json -, flexiso extract FILE --iso H --out mesh.ply, flexiso render FILE \
+--out shot.png (flexiso --help lists them); or run the window under Xvfb (xvfb-run flexiso)";
+
+/// True where a window cannot open: Linux and the BSDs without an X11 or
+/// Wayland display named in the environment.
+fn no_display() -> bool {
+    cfg!(all(unix, not(target_os = "macos")))
+        && std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty())
+        && std::env::var_os("WAYLAND_DISPLAY").is_none_or(|d| d.is_empty())
+}
+
 fn main() {
     let cli = Cli::parse();
+    cli::set_quiet(cli.quiet);
+    if matches!(cli.command, None | Some(Command::Open(_))) && no_display() {
+        eprintln!("error: {NO_DISPLAY}");
+        std::process::exit(2);
+    }
     let result = match cli.command {
         None => cli::open::run(cli::open::Args::default()),
         Some(Command::Open(a)) => cli::open::run(a),

@@ -47,7 +47,11 @@ fn extract(args: &[&str]) -> (String, Vec<Row>) {
 
 /// (vertices, faces) of a binary PLY, checking the body's size.
 fn ply_counts(path: &Path) -> (usize, usize) {
-    let bytes = std::fs::read(path).expect("read ply");
+    ply_bytes_counts(&std::fs::read(path).expect("read ply"))
+}
+
+/// [`ply_counts`] of the bytes of a PLY.
+fn ply_bytes_counts(bytes: &[u8]) -> (usize, usize) {
     let end = bytes
         .windows(11)
         .position(|w| w == b"end_header\n")
@@ -232,4 +236,203 @@ fn tree_json_has_betti_numbers_per_arc() {
         assert_eq!(b[0], 1, "one contour per arc point");
         assert_eq!(b[0] - b[1] + b[2], euler, "χ = β0 - β1 + β2");
     }
+}
+
+// ------------------------------------------------------ a CLI that pipes
+
+#[test]
+fn tree_json_to_stdout_carries_only_the_json_and_the_report_goes_to_stderr() {
+    let o = flexiso(&["tree", "synthetic:12", "--json", "-"]);
+    assert!(o.success(), "{}", o.stderr);
+    let json: serde_json::Value =
+        serde_json::from_str(&o.stdout).expect("stdout is one JSON value");
+    assert!(json["nodes"].as_array().is_some_and(|n| !n.is_empty()));
+    assert!(
+        o.stderr.contains("superarcs:"),
+        "report on stderr: {}",
+        o.stderr
+    );
+    assert!(!o.stderr.contains("error"), "{}", o.stderr);
+    // -q: nothing but the product.
+    let q = flexiso(&["-q", "tree", "synthetic:12", "--json", "-"]);
+    assert!(q.success() && q.stderr.is_empty(), "{}", q.stderr);
+    assert_eq!(q.stdout, o.stdout);
+    // And without -: the report on stdout, as before.
+    let plain = flexiso(&["tree", "synthetic:12"]);
+    assert!(plain.stdout.contains("superarcs:") && plain.stderr.is_empty());
+}
+
+#[test]
+fn tree_json_carries_the_source_geometry_and_node_positions() {
+    let o = flexiso(&["tree", "synthetic:12", "--json", "-"]);
+    assert!(o.success(), "{}", o.stderr);
+    let json: serde_json::Value = serde_json::from_str(&o.stdout).expect("JSON");
+    assert_eq!(
+        json["geometry"]["origin"],
+        serde_json::json!([0.0, 0.0, 0.0])
+    );
+    assert_eq!(
+        json["geometry"]["spacing"].as_array().map(Vec::len),
+        Some(3)
+    );
+    assert_eq!(
+        json["geometry"]["direction"].as_array().map(Vec::len),
+        Some(3)
+    );
+    assert_eq!(json["geometry"]["positions"], "unnamed");
+    assert_eq!(json["source"]["value_type"], "float32");
+    for node in json["nodes"].as_array().expect("nodes") {
+        let v = node["vertex"].as_u64().expect("vertex") as usize;
+        let want = [v % 12, v / 12 % 12, v / 144].map(|c| c as f64);
+        let got: Vec<f64> = node["position"]
+            .as_array()
+            .expect("position")
+            .iter()
+            .map(|x| x.as_f64().expect("number"))
+            .collect();
+        // The synthetic field has unit spacing at the origin: world = index.
+        assert_eq!(got, want, "node {v}");
+    }
+    let idx = flexiso(&["tree", "synthetic:12", "--json", "-", "--space", "index"]);
+    let json: serde_json::Value = serde_json::from_str(&idx.stdout).expect("JSON");
+    assert_eq!(json["geometry"]["positions"], "index");
+}
+
+#[test]
+fn extract_to_stdout_writes_only_the_mesh() {
+    let o = flexiso(&[
+        "extract",
+        "synthetic:16",
+        "--iso",
+        "0.5",
+        "--out",
+        "-",
+        "--format",
+        "ply",
+    ]);
+    assert!(o.success(), "{}", o.stderr);
+    assert!(o.stdout_bytes.starts_with(b"ply\n"), "a PLY on stdout");
+    let (nv, nf) = ply_bytes_counts(&o.stdout_bytes);
+    assert!(nv > 0 && nf > 0);
+    assert!(
+        o.stderr.contains("extract:"),
+        "report on stderr: {}",
+        o.stderr
+    );
+    let o = flexiso(&["extract", "synthetic:16", "--iso", "0.5", "--out", "-"]);
+    assert_eq!(o.code, 2);
+    assert!(o.stderr.contains("--format"), "{}", o.stderr);
+}
+
+#[test]
+fn an_output_path_that_cannot_be_written_fails_before_the_work_with_one_error() {
+    for args in [
+        vec![
+            "extract",
+            "synthetic:16",
+            "--iso",
+            "0.5",
+            "--out",
+            "/nonexistent/dir/x.ply",
+        ],
+        vec!["tree", "synthetic:16", "--json", "/nonexistent/dir/t.json"],
+        vec!["render", "synthetic:16", "--out", "/nonexistent/dir/r.png"],
+    ] {
+        let o = flexiso(&args);
+        assert_eq!(o.code, 2, "{args:?}");
+        // Nothing was computed: no report line before the error.
+        assert!(o.stdout.is_empty(), "{args:?}: {}", o.stdout);
+        assert_eq!(
+            o.stderr.lines().count(),
+            1,
+            "{args:?}: one error: {}",
+            o.stderr
+        );
+        assert!(
+            o.stderr.contains("does not exist"),
+            "{args:?}: {}",
+            o.stderr
+        );
+    }
+}
+
+#[test]
+fn the_explorer_without_a_display_says_how_to_work_headless() {
+    let o = common::flexiso_without_display(&[]);
+    assert_eq!(o.code, 2);
+    assert_eq!(o.stderr.lines().count(), 1, "{}", o.stderr);
+    assert!(
+        o.stderr.contains("no display") && o.stderr.contains("flexiso extract"),
+        "{}",
+        o.stderr
+    );
+}
+
+#[test]
+fn world_coordinates_place_the_mesh_on_the_volume_and_index_on_the_grid() {
+    let Some(mha) = common::dataset("formats/real-tools/neghip_oriented_sitk.mha") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let bounds = |space: &str| {
+        let out = dir.path().join(format!("{space}.obj"));
+        let o = flexiso(&[
+            "extract",
+            mha.to_str().expect("utf-8"),
+            "--iso",
+            "100",
+            "--space",
+            space,
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        assert!(o.success(), "{}", o.stderr);
+        let text = std::fs::read_to_string(&out).expect("obj");
+        assert!(text.contains(&format!(
+            "# space {}",
+            if space == "world" { "LPS" } else { "index" }
+        )));
+        let mut lo = [f64::MAX; 3];
+        let mut hi = [f64::MIN; 3];
+        for l in text.lines().filter(|l| l.starts_with("v ")) {
+            for (k, t) in l.split_whitespace().skip(1).enumerate() {
+                let x: f64 = t.parse().expect("number");
+                lo[k] = lo[k].min(x);
+                hi[k] = hi[k].max(x);
+            }
+        }
+        (lo, hi)
+    };
+    // Index: inside the grid.
+    let (lo, hi) = bounds("index");
+    assert!(
+        lo.iter().all(|&x| x >= 0.0) && hi.iter().all(|&x| x <= 63.0),
+        "{lo:?} {hi:?}"
+    );
+    // World (LPS, as SimpleITK reports it): axis i runs along -y from 40
+    // (63 · 0.9), axis j along +x from -12.5 (63 · 1.1), k along +z from
+    // 7.25 (63 · 1.3).
+    let (wlo, whi) = bounds("world");
+    let eps = 1e-3;
+    assert!(
+        wlo[0] >= -12.5 - eps && whi[0] <= -12.5 + 69.3 + eps,
+        "x {wlo:?} {whi:?}"
+    );
+    assert!(
+        wlo[1] >= 40.0 - 56.7 - eps && whi[1] <= 40.0 + eps,
+        "y {wlo:?} {whi:?}"
+    );
+    assert!(
+        wlo[2] >= 7.25 - eps && whi[2] <= 7.25 + 81.9 + eps,
+        "z {wlo:?} {whi:?}"
+    );
+    // The same mesh: index x (axis i) maps to world y = 40 - 0.9 i.
+    assert!(
+        (whi[1] - (40.0 - 0.9 * lo[0])).abs() < 1e-2,
+        "{whi:?} {lo:?}"
+    );
+    assert!(
+        (wlo[0] - (-12.5 + 1.1 * lo[1])).abs() < 1e-2,
+        "{wlo:?} {lo:?}"
+    );
 }

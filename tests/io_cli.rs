@@ -133,3 +133,48 @@ fn info_on_bad_input_exits_2_with_one_line() {
     assert_eq!(code, 2);
     assert!(err.contains("No such file"), "{err}");
 }
+
+#[test]
+fn info_prints_origin_direction_and_space_and_the_same_as_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let vals = reference("uint8", 60);
+    let p = write(
+        dir.path(),
+        "o.nrrd",
+        &nrrd(
+            "uint8",
+            &[5, 4, 3],
+            "raw",
+            "",
+            "space: RAS\nspace directions: (0,2,0) (-3,0,0) (0,0,0.5)\nspace origin: (10,20,30)\n",
+            &encode(&vals, "uint8", false),
+        ),
+    );
+    let run = flexiso(&["info", p.to_str().unwrap()]);
+    assert!(run.success(), "{}", run.stderr);
+    for want in [
+        "spacing:   2 x 3 x 0.5",
+        "origin:    10 20 30 (RAS space)",
+        "direction: (0 1 0) (-1 0 0) (0 0 1)",
+    ] {
+        assert!(
+            run.stdout.contains(want),
+            "missing '{want}' in\n{}",
+            run.stdout
+        );
+    }
+    let run = flexiso(&["info", p.to_str().unwrap(), "--json"]);
+    assert!(run.success(), "{}", run.stderr);
+    let json: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
+    assert_eq!(json["origin"], serde_json::json!([10.0, 20.0, 30.0]));
+    assert_eq!(json["space"], "RAS");
+    assert_eq!(json["dims"], serde_json::json!([5, 4, 3]));
+    assert_eq!(json["direction"][1], serde_json::json!([-1.0, 0.0, 0.0]));
+    let counts: u64 = json["histogram"]["counts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_u64().unwrap())
+        .sum();
+    assert_eq!(counts, 60);
+}

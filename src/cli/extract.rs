@@ -15,26 +15,19 @@
 
 use super::arcs::{Arcs, Target, parse_arc};
 use super::input::InputArgs;
-use crate::contour::export::{MeshFormat, write_contours};
+use super::{Report, SpaceArg};
+use crate::contour::export::{MeshFormat, write_contours_as, write_mesh};
 use crate::contour::{self, ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds};
 use crate::field::Isovalue;
 use crate::measure::betti::ContourTopology;
 use crate::progress::Progress;
+use crate::report;
 use crate::simplify::Measure;
 use crate::tree::ContourTree;
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// `println!` that ignores a closed standard output (`flexiso extract ...
-/// | head`): the printout is a report, the file is the product.
-macro_rules! out {
-    ($($t:tt)*) => {{
-        use std::io::Write;
-        let _ = writeln!(std::io::stdout().lock(), $($t)*);
-    }};
-}
 
 /// Arguments of `flexiso extract`.
 #[derive(clap::Args, Debug, Default)]
@@ -57,23 +50,62 @@ pub struct Args {
     /// Local geometric measure that ranks leaves for --simplify.
     #[arg(long, value_parser = super::input::measure_parser(), default_value_t = Measure::Hypervolume)]
     pub measure: Measure,
-    /// Mesh file to write: .ply (binary), .obj or .stl. Without it, only
-    /// the printout.
+    /// Mesh file to write: .ply (binary), .obj or .stl; `-` for standard
+    /// output (with --format; the printout then goes to standard error).
+    /// Without it, only the printout.
     #[arg(long, short, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Mesh format, when --out does not say it by its extension (`-`).
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+    /// Coordinates of the mesh file: `world` (the volume's origin,
+    /// direction and spacing, in the space its file names: lines up with
+    /// the volume in 3D Slicer or ParaView) or `index` (voxel indices).
+    #[arg(long, value_enum, default_value_t = SpaceArg::World)]
+    pub space: SpaceArg,
+}
+
+/// `--format`: a mesh format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FormatArg {
+    /// Binary little-endian PLY.
+    Ply,
+    /// Wavefront OBJ.
+    Obj,
+    /// Binary STL.
+    Stl,
+}
+
+impl From<FormatArg> for MeshFormat {
+    fn from(f: FormatArg) -> Self {
+        match f {
+            FormatArg::Ply => MeshFormat::Ply,
+            FormatArg::Obj => MeshFormat::Obj,
+            FormatArg::Stl => MeshFormat::Stl,
+        }
+    }
 }
 
 /// Runs `flexiso extract`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Check what is cheap to check before the expensive work.
-    if let Some(out) = &args.out
-        && MeshFormat::from_path(out).is_none()
-    {
-        bail!(
-            "{}: unknown mesh format; use a .ply, .obj or .stl file name",
-            out.display()
-        );
+    let format = match (&args.out, args.format) {
+        (None, _) => None,
+        (Some(_), Some(f)) => Some(MeshFormat::from(f)),
+        (Some(out), None) if super::is_stdio(out) => {
+            bail!("--out - needs --format ply, obj or stl");
+        }
+        (Some(out), None) => Some(MeshFormat::from_path(out).with_context(|| {
+            format!(
+                "{}: unknown mesh format; use a .ply, .obj or .stl file name, or --format",
+                out.display()
+            )
+        })?),
+    };
+    if let Some(out) = &args.out {
+        super::check_output(out)?;
     }
+    let r = Report::new(args.out.as_deref().is_some_and(super::is_stdio));
     if !args.iso.is_finite() {
         bail!("--iso must be a finite number");
     }
@@ -82,7 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let load = t.elapsed().as_secs_f64();
     let field = &volume.field;
     for w in &volume.warnings {
-        eprintln!("warning: {w}");
+        r.warn(w);
     }
     let (lo, hi) = field.range();
     let h = args.iso;
@@ -90,7 +122,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
     }
     let [x, y, z] = field.dims();
-    out!(
+    report!(
+        r,
         "input:    {} ({}), {x} x {y} x {z}, values {lo} .. {hi} (load {load:.3} s)",
         volume.path.display(),
         volume.format
@@ -104,7 +137,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Arcs::Superarcs,
     };
     let targets = arcs.targets(&tree, field)?;
-    out!(
+    report!(
+        r,
         "tree:     {} superarcs{} ({:.3} s)",
         tree.arcs().len(),
         match args.simplify {
@@ -147,7 +181,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let extract = t.elapsed().as_secs_f64();
     let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();
-    out!(
+    report!(
+        r,
         "seeds:    {} of {} arcs span h, found in {seeding:.4} s ({:.2} us per arc tested)",
         seeds.len(),
         targets.len(),
@@ -156,7 +191,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     contours.retain(|(_, m)| m.num_triangles() > 0);
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
     let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();
-    out!(
+    report!(
+        r,
         "extract:  h = {h}: {} contour(s), {triangles} triangles in {extract:.4} s ({:.2} M triangles/s{})",
         contours.len(),
         triangles as f64 / extract.max(1e-9) / 1e6,
@@ -169,11 +205,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .par_iter()
         .map(|(_, m)| MeshTopology::of(&m.positions, &m.indices))
         .collect();
-    out!(
+    report!(
+        r,
         "measure:  {:.3} s (Betti numbers of every superarc, topology of every contour)",
         t.elapsed().as_secs_f64()
     );
-    out!(
+    report!(
+        r,
         "{:>23} {:>10} {:>10} {:>14} {:>14} {:>6} {:>6} {:>12}",
         "arc",
         "triangles",
@@ -191,7 +229,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             "open".to_string()
         };
-        out!(
+        report!(
+            r,
             "{:>23} {:>10} {:>10} {:>14.6} {:>14} {:>6} {:>6} {:>12}",
             format!("{}:{}", target.upper, target.lower),
             t.triangles,
@@ -204,15 +243,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
 
-    if let Some(out) = &args.out {
+    if let (Some(out), Some(format)) = (&args.out, format) {
         let t = Instant::now();
         let names: Vec<String> = contours
             .iter()
             .map(|(t, _)| format!("arc_{}_{}", t.upper, t.lower))
             .collect();
-        let meshes: Vec<ContourMesh> = contours.into_iter().map(|(_, m)| m).collect();
-        write_contours(out, &meshes, &names)?;
-        out!(
+        let mut meshes: Vec<ContourMesh> = contours.into_iter().map(|(_, m)| m).collect();
+        for m in &mut meshes {
+            m.to_frame(field, args.space.frame());
+        }
+        let note = format!(
+            "space {}; flexiso extract --iso {h}",
+            args.space.describe(field)
+        );
+        if super::is_stdio(out) {
+            let mut bytes = Vec::new();
+            write_mesh(&mut bytes, format, &meshes, &names, &note)
+                .context("cannot encode the mesh")?;
+            super::write_stdout(&bytes)?;
+        } else {
+            write_contours_as(out, format, &meshes, &names, &note)?;
+        }
+        report!(
+            r,
             "wrote:    {} ({} object(s), {:.3} s)",
             out.display(),
             meshes.len(),

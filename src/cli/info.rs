@@ -1,6 +1,7 @@
 //! `flexiso info`: what a volume file holds (format, grid, type, spacing,
-//! value range, a histogram, the number of distinct values for integer
-//! data) and the memory its contour tree will need.
+//! origin and direction in the world, value range, a histogram, the number
+//! of distinct values for integer data) and the memory its contour tree
+//! will need.
 
 use super::input::InputArgs;
 use crate::field::io::{TREE_BYTES_PER_VERTEX, Volume};
@@ -16,13 +17,59 @@ pub struct Args {
     /// Number of histogram bins.
     #[arg(long, default_value_t = 10)]
     pub bins: usize,
+    /// Print the same as one JSON object (on standard output).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Runs `flexiso info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let volume = args.input.load()?;
-    print!("{}", report(&volume, args.bins.clamp(1, 1000)));
+    let bins = args.bins.clamp(1, 1000);
+    if args.json {
+        let mut text = serde_json::to_string_pretty(&report_json(&volume, bins))?;
+        text.push('\n');
+        return super::write_stdout(text.as_bytes());
+    }
+    if !super::quiet() {
+        super::write_stdout(report(&volume, bins).as_bytes())?;
+    }
     Ok(())
+}
+
+/// What [`report`] says, as JSON: `file`, `format`, `dims`, `type`,
+/// `file_type`, `spacing`, `origin`, `direction` (per axis), `space`,
+/// `range`, `distinct` (integers), `histogram` (`edges`, `counts`),
+/// `memory_bytes`, `warnings`.
+pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
+    let f = &volume.field;
+    let v = f.values();
+    let (lo, hi) = f.range();
+    let bins = if hi > lo { bins } else { 1 };
+    let counts = histogram(v, lo, hi, bins);
+    let width = (hi - lo) / bins as f64;
+    let edges: Vec<f64> = (0..=bins)
+        .map(|i| if i == bins { hi } else { lo + width * i as f64 })
+        .collect();
+    let g = f.geometry();
+    let n = f.len() as u64;
+    serde_json::json!({
+        "file": volume.path.display().to_string(),
+        "format": volume.format,
+        "dims": f.dims(),
+        "vertices": n,
+        "type": v.type_name(),
+        "file_type": volume.scalar_type.name(),
+        "spacing": f.spacing(),
+        "origin": g.origin,
+        "direction": g.direction,
+        "space": g.space.name(),
+        "range": [lo, hi],
+        "distinct": distinct(v),
+        "histogram": { "edges": edges, "counts": counts },
+        "memory_bytes": n * (v.bytes_per_value() as u64 + TREE_BYTES_PER_VERTEX),
+        "warnings": volume.warnings,
+    })
 }
 
 fn bytes(k: usize) -> String {
@@ -74,6 +121,19 @@ pub fn report(volume: &Volume, bins: usize) -> String {
         );
     }
     let _ = writeln!(out, "spacing:   {sx} x {sy} x {sz}");
+    let g = f.geometry();
+    let [ox, oy, oz] = g.origin;
+    let _ = writeln!(out, "origin:    {ox} {oy} {oz} ({} space)", g.space);
+    let axes: Vec<String> = g
+        .direction
+        .iter()
+        .map(|d| format!("({} {} {})", num(d[0]), num(d[1]), num(d[2])))
+        .collect();
+    let _ = writeln!(
+        out,
+        "direction: {} (the world directions of the i, j, k axes)",
+        axes.join(" ")
+    );
     let _ = writeln!(out, "range:     {lo} .. {hi}");
     if let Some(d) = distinct(v) {
         let _ = writeln!(out, "distinct:  {d} value{}", if d == 1 { "" } else { "s" });

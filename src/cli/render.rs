@@ -24,7 +24,7 @@ pub struct Args {
     /// The volume.
     #[command(flatten)]
     pub input: InputArgs,
-    /// Where to write the PNG.
+    /// Where to write the PNG (`-`: standard output).
     #[arg(long, short, value_name = "PNG", default_value = "flexiso.png")]
     pub out: PathBuf,
     /// Isovalue (default: the middle of the arc's or the volume's range).
@@ -66,10 +66,13 @@ struct Surface {
 /// Runs `flexiso render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (width, height) = args.size.unwrap_or((1024, 768));
+    super::check_output(&args.out)?;
+    // The report goes to standard error: the picture is the product.
+    let r = super::Report::new(true);
     let volume = args.input.load()?;
     let field = &volume.field;
     for w in &volume.warnings {
-        eprintln!("warning: {w}");
+        r.warn(w);
     }
     let (tree, _) = ContourTree::from_field(field, &crate::progress::Progress::new())
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
@@ -88,7 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                      exists only for values in that range"
                 );
             }
-            eprintln!("arc {upper}:{lower} at h = {h}");
+            crate::report!(r, "arc {upper}:{lower} at h = {h}");
             arc_contour(field, &tree, target, h)?
         }
         None => {
@@ -96,12 +99,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if !(lo..=hi).contains(&h) {
                 bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
             }
-            eprintln!("all contours at h = {h}");
+            crate::report!(r, "all contours at h = {h}");
             all_contours(field, &tree, h)?
         }
     };
     let triangles: usize = surfaces.iter().map(|s| s.indices.len() / 3).sum();
-    eprintln!("{} contour(s), {triangles} triangles", surfaces.len());
+    crate::report!(r, "{} contour(s), {triangles} triangles", surfaces.len());
 
     let bounds = crate::render::grid_bounds(field.dims(), field.spacing());
     let meshes: Vec<HeadlessMesh<'_>> = surfaces
@@ -122,9 +125,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     camera.fit(bounds.0, bounds.1);
     let img = crate::render::render_to_image(&meshes, Some(bounds), Some(&camera), width, height)
         .context("rendering failed")?;
-    img.save(&args.out)
-        .with_context(|| format!("cannot write {}", args.out.display()))?;
-    eprintln!("wrote {} ({width}x{height})", args.out.display());
+    if super::is_stdio(&args.out) {
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .context("cannot encode the PNG")?;
+        super::write_stdout(&png)?;
+    } else {
+        img.save(&args.out)
+            .with_context(|| format!("{}: cannot write", args.out.display()))?;
+    }
+    crate::report!(r, "wrote {} ({width}x{height})", args.out.display());
     Ok(())
 }
 

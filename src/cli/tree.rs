@@ -4,7 +4,9 @@
 //! optionally a simplified level; optionally all of it as JSON.
 
 use super::input::InputArgs;
+use super::{Report, SpaceArg};
 use crate::progress::Progress;
+use crate::report;
 use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
 use anyhow::Context;
@@ -29,12 +31,24 @@ pub struct Args {
     /// Simplify by pruning every leaf whose cost is at most X.
     #[arg(long, value_name = "X")]
     pub feature_size: Option<f64>,
+    /// Coordinates of the nodes' `position` in the JSON: `world` (the
+    /// volume's origin, direction and spacing, in its file's space) or
+    /// `index` (voxel indices).
+    #[arg(long, value_enum, default_value_t = SpaceArg::World)]
+    pub space: SpaceArg,
 }
 
 /// Runs `flexiso tree`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.json {
+        super::check_output(path)?;
+    }
+    let r = Report::new(args.json.as_deref().is_some_and(super::is_stdio));
     let t = Instant::now();
     let volume = args.input.load()?;
+    for w in &volume.warnings {
+        r.warn(w);
+    }
     let load = t.elapsed();
     let field = &volume.field;
     let (tree, times) = ContourTree::from_field(field, &Progress::new())
@@ -42,26 +56,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let [x, y, z] = field.dims();
     let (lo, hi) = field.range();
     let (maxima, minima, joins, splits) = tree.kind_counts();
-    println!(
+    report!(
+        r,
         "input:          {} ({})",
         volume.path.display(),
         volume.format
     );
-    println!(
+    report!(
+        r,
         "dims:           {x} x {y} x {z} = {} vertices, {}, values {lo} .. {hi}",
         field.len(),
         field.values().type_name()
     );
-    println!("maxima:         {maxima}");
-    println!("minima:         {minima}");
-    println!("join saddles:   {joins}");
-    println!("split saddles:  {splits}");
-    println!("supernodes:     {}", tree.nodes().len());
-    println!("superarcs:      {}", tree.arcs().len());
+    report!(r, "maxima:         {maxima}");
+    report!(r, "minima:         {minima}");
+    report!(r, "join saddles:   {joins}");
+    report!(r, "split saddles:  {splits}");
+    report!(r, "supernodes:     {}", tree.nodes().len());
+    report!(r, "superarcs:      {}", tree.arcs().len());
     let t = Instant::now();
     let collapsed = CollapsedTree::new(&tree, field);
     let collapse = t.elapsed();
-    println!(
+    report!(
+        r,
         "collapsed arcs: {} (zero-height arcs contracted)",
         collapsed.num_arcs()
     );
@@ -75,7 +92,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else if let Some(x) = args.feature_size {
             level.set_feature_size(x);
         }
-        println!(
+        report!(
+            r,
             "simplified:     {} arcs by {} (feature size {}, {} of {} steps; measures and collapse {:.3} s, pruning sequence {:.3} s)",
             level.num_arcs(),
             args.measure,
@@ -90,7 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None
     };
     let s = |d: std::time::Duration| d.as_secs_f64();
-    println!(
+    report!(
+        r,
         "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
         s(load),
         s(times.sort),
@@ -104,6 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     if let Some(path) = &args.json {
         let mut json = crate::tree::json::tree_json(&tree, field);
+        add_geometry(&mut json, &volume, args.space);
         crate::measure::betti::ContourTopology::new(&tree, field).add_to_json(&mut json);
         if let Some(obj) = json.as_object_mut() {
             obj.insert(
@@ -117,13 +137,51 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 );
             }
         }
-        let text = serde_json::to_string(&json)?;
-        if path.as_os_str() == "-" {
-            println!("{text}");
+        let mut text = serde_json::to_string(&json)?;
+        if super::is_stdio(path) {
+            text.push('\n');
+            super::write_stdout(text.as_bytes())?;
         } else {
             std::fs::write(path, text)
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
     }
     Ok(())
+}
+
+/// Adds where the volume came from and sits in the world to the tree's
+/// JSON: `source` (file, format, value type in the file), `geometry`
+/// (spacing, origin, direction rows per axis, space, and the space of the
+/// nodes' positions), and a `position` to every node.
+fn add_geometry(json: &mut serde_json::Value, volume: &crate::field::io::Volume, space: SpaceArg) {
+    let field = &volume.field;
+    let g = field.geometry();
+    if let Some(nodes) = json.get_mut("nodes").and_then(|n| n.as_array_mut()) {
+        for node in nodes {
+            let Some(v) = node.get("vertex").and_then(|v| v.as_u64()) else {
+                continue;
+            };
+            node["position"] = serde_json::json!(space.position(field, v as u32));
+        }
+    }
+    if let Some(obj) = json.as_object_mut() {
+        obj.insert(
+            "source".into(),
+            serde_json::json!({
+                "file": volume.path.display().to_string(),
+                "format": volume.format,
+                "value_type": volume.scalar_type.name(),
+            }),
+        );
+        obj.insert(
+            "geometry".into(),
+            serde_json::json!({
+                "spacing": field.spacing(),
+                "origin": g.origin,
+                "direction": g.direction,
+                "space": g.space.name(),
+                "positions": space.describe(field),
+            }),
+        );
+    }
 }

@@ -19,12 +19,13 @@ pub enum ExportError {
         path: String,
     },
     /// The file could not be written.
-    #[error("{path}: cannot write: {source}")]
+    #[error("{path}: cannot write: {error}")]
     Io {
         /// The file.
         path: String,
-        /// The cause.
-        source: io::Error,
+        /// The operating system's reason (part of the message, so not a
+        /// `source`: printing the chain would repeat it).
+        error: io::Error,
     },
 }
 
@@ -59,32 +60,77 @@ pub fn write_contours(
     contours: &[impl Borrow<ContourMesh>],
     names: &[String],
 ) -> Result<(), ExportError> {
-    let shown = || path.display().to_string();
-    let format =
-        MeshFormat::from_path(path).ok_or_else(|| ExportError::UnknownFormat { path: shown() })?;
-    let io_err = |source| ExportError::Io {
-        path: shown(),
-        source,
+    write_contours_noting(path, contours, names, "")
+}
+
+/// [`write_contours`] with a line of text for the file's header (a PLY
+/// `comment`, an OBJ `#` line, the start of STL's 80-byte header), e.g. the
+/// coordinate space of the positions.
+pub fn write_contours_noting(
+    path: &Path,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    note: &str,
+) -> Result<(), ExportError> {
+    let format = MeshFormat::from_path(path).ok_or_else(|| ExportError::UnknownFormat {
+        path: path.display().to_string(),
+    })?;
+    write_contours_as(path, format, contours, names, note)
+}
+
+/// [`write_contours_noting`] in a format named, whatever the extension.
+pub fn write_contours_as(
+    path: &Path,
+    format: MeshFormat,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    note: &str,
+) -> Result<(), ExportError> {
+    let io_err = |error| ExportError::Io {
+        path: path.display().to_string(),
+        error,
     };
     let file = std::fs::File::create(path).map_err(io_err)?;
     let mut w = BufWriter::new(file);
+    write_mesh(&mut w, format, contours, names, note)
+        .and_then(|_| w.flush())
+        .map_err(io_err)
+}
+
+/// Writes `contours` in `format` to any writer (standard output, a
+/// buffer), with `note` in the header.
+pub fn write_mesh(
+    w: &mut impl Write,
+    format: MeshFormat,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    note: &str,
+) -> io::Result<()> {
+    let note: String = note.chars().filter(|c| !c.is_control()).collect();
     match format {
-        MeshFormat::Ply => write_ply(&mut w, contours),
-        MeshFormat::Obj => write_obj(&mut w, contours, names),
-        MeshFormat::Stl => write_stl(&mut w, contours),
+        MeshFormat::Ply => write_ply(w, contours, &note),
+        MeshFormat::Obj => write_obj(w, contours, names, &note),
+        MeshFormat::Stl => write_stl(w, contours, &note),
     }
-    .and_then(|_| w.flush())
-    .map_err(io_err)
 }
 
 /// Binary PLY: vertices with normals, faces with the index of their
 /// contour.
-pub fn write_ply(w: &mut impl Write, contours: &[impl Borrow<ContourMesh>]) -> io::Result<()> {
+pub fn write_ply(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    note: &str,
+) -> io::Result<()> {
     let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
     let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
+    let note = if note.is_empty() {
+        String::new()
+    } else {
+        format!("comment {note}\n")
+    };
     write!(
         w,
-        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n\
+        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n{note}\
          element vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
          property float nx\nproperty float ny\nproperty float nz\n\
          element face {nf}\nproperty list uchar int vertex_indices\nproperty int contour\nend_header\n"
@@ -117,8 +163,12 @@ pub fn write_obj(
     w: &mut impl Write,
     contours: &[impl Borrow<ContourMesh>],
     names: &[String],
+    note: &str,
 ) -> io::Result<()> {
     writeln!(w, "# flexiso contours")?;
+    if !note.is_empty() {
+        writeln!(w, "# {note}")?;
+    }
     let mut base = 1usize;
     for (i, c) in contours.iter().enumerate() {
         let c = c.borrow();
@@ -143,9 +193,16 @@ pub fn write_obj(
 }
 
 /// Binary STL: every triangle of every contour with its facet normal.
-pub fn write_stl(w: &mut impl Write, contours: &[impl Borrow<ContourMesh>]) -> io::Result<()> {
+pub fn write_stl(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    note: &str,
+) -> io::Result<()> {
     let mut header = [0u8; 80];
-    let text = b"flexiso contours";
+    // "solid" must not start a binary STL's header (readers take it for
+    // ASCII): ours starts with "flexiso".
+    let text = format!("flexiso contours {note}");
+    let text = &text.as_bytes()[..text.len().min(80)];
     header[..text.len()].copy_from_slice(text);
     w.write_all(&header)?;
     let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();

@@ -57,10 +57,28 @@ pub use global::{all_contours, contours_through, follow_all};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;
 
+use crate::field::ScalarField;
 use crate::tree::ArcId;
 
-/// One extracted contour: an indexed triangle mesh in world units
-/// (grid coordinates times spacing).
+/// The frame a mesh's positions are given in. Contours are made in the
+/// grid frame (index × spacing, vertex 0 at the origin, axes along x, y,
+/// z); [`ContourMesh::to_frame`] moves them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Frame {
+    /// Voxel indices: vertex (i, j, k) at (i, j, k).
+    Index,
+    /// Index × spacing, axis-aligned from vertex 0: what the engine makes
+    /// and the explorer draws.
+    #[default]
+    Grid,
+    /// The file's world: origin, directions and spacing
+    /// ([`crate::field::Geometry`]), in its named space (LPS, RAS), so the
+    /// mesh lines up with the volume in 3D Slicer, ParaView or ITK-SNAP.
+    World,
+}
+
+/// One extracted contour: an indexed triangle mesh in the grid frame
+/// (grid coordinates times spacing; see [`Frame`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContourMesh {
     /// The superarc whose contour this is.
@@ -91,5 +109,44 @@ impl ContourMesh {
     /// Number of triangles.
     pub fn num_triangles(&self) -> usize {
         self.indices.len() / 3
+    }
+
+    /// Moves a mesh made in the grid frame of `field` into `frame`:
+    /// positions and normals (by the inverse transpose, so they stay
+    /// perpendicular), and the triangles rewound when the move is a
+    /// reflection, so each keeps facing the same side of the surface.
+    pub fn to_frame(&mut self, field: &ScalarField, frame: Frame) {
+        let spacing = field.spacing();
+        let g = field.geometry();
+        let f64s = |p: [f32; 3]| p.map(f64::from);
+        let f32s = |p: [f64; 3]| p.map(|x| x as f32);
+        match frame {
+            Frame::Grid => {}
+            Frame::Index => {
+                for p in &mut self.positions {
+                    *p = f32s(std::array::from_fn(|a| f64::from(p[a]) / spacing[a]));
+                }
+                for n in &mut self.normals {
+                    let m: [f64; 3] = std::array::from_fn(|a| f64::from(n[a]) * spacing[a]);
+                    let l = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+                    if l > 0.0 {
+                        *n = f32s(m.map(|x| x / l));
+                    }
+                }
+            }
+            Frame::World => {
+                for p in &mut self.positions {
+                    *p = f32s(g.to_world(f64s(*p)));
+                }
+                for n in &mut self.normals {
+                    *n = f32s(g.normal_to_world(f64s(*n)));
+                }
+                if g.is_reflection() {
+                    for t in self.indices.chunks_exact_mut(3) {
+                        t.swap(1, 2);
+                    }
+                }
+            }
+        }
     }
 }

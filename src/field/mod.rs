@@ -1,5 +1,5 @@
-//! The scalar field: a regular grid of values, its spacing, and the total
-//! order on its vertices.
+//! The scalar field: a regular grid of values, its spacing, where it sits
+//! in the world ([`Geometry`]), and the total order on its vertices.
 //!
 //! Values are kept in the type the file had (a uint8 CT scan stays one byte
 //! per voxel). The engine never compares values directly: it works on the
@@ -11,11 +11,13 @@
 //! top bit of some per-vertex words, so a field holds at most
 //! [`MAX_VERTICES`] vertices (about 1290^3).
 
+mod geometry;
 pub mod io;
 mod order;
 pub mod source;
 pub mod synthetic;
 
+pub use geometry::{Geometry, GeometryError, Space};
 pub use order::vertex_order;
 
 use thiserror::Error;
@@ -281,6 +283,7 @@ pub fn checked_vertex_count(dims: [usize; 3]) -> Result<usize, FieldError> {
 pub struct ScalarField {
     dims: [usize; 3],
     spacing: [f64; 3],
+    geometry: Geometry,
     values: Values,
 }
 
@@ -320,8 +323,28 @@ impl ScalarField {
         Ok(Self {
             dims,
             spacing,
+            geometry: Geometry::IDENTITY,
             values,
         })
+    }
+
+    /// The same field placed in the world by `geometry`.
+    pub fn with_geometry(mut self, geometry: Geometry) -> Self {
+        self.geometry = geometry;
+        self
+    }
+
+    /// Where the grid sits in the world.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    /// The world position of vertex `v`: origin + direction · (index ×
+    /// spacing).
+    pub fn world_position(&self, v: u32) -> [f64; 3] {
+        let c = self.coords(v);
+        self.geometry
+            .to_world(std::array::from_fn(|a| c[a] as f64 * self.spacing[a]))
     }
 
     /// Grid dimensions (X, Y, Z).

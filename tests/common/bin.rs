@@ -28,10 +28,25 @@ pub fn flexiso(args: &[&str]) -> Run {
     flexiso_with_stdin(args, &[])
 }
 
+/// Runs `flexiso ARGS` with no display named in its environment (no
+/// `DISPLAY`, no `WAYLAND_DISPLAY`).
+pub fn flexiso_without_display(args: &[&str]) -> Run {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flexiso"));
+    c.args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY");
+    finish(c, &[])
+}
+
 /// Runs `flexiso ARGS` with `stdin` piped to its standard input.
 pub fn flexiso_with_stdin(args: &[&str], stdin: &[u8]) -> Run {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_flexiso"))
-        .args(args)
+    let mut c = Command::new(env!("CARGO_BIN_EXE_flexiso"));
+    c.args(args);
+    finish(c, stdin)
+}
+
+fn finish(mut c: Command, stdin: &[u8]) -> Run {
+    let mut child = c
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

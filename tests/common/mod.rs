@@ -15,6 +15,6 @@ pub mod data;
 pub mod formats;
 pub mod gpu;
 
-pub use bin::{Run, flexiso, flexiso_with_stdin};
+pub use bin::{Run, flexiso, flexiso_with_stdin, flexiso_without_display};
 pub use data::{data_dir, dataset};
 pub use gpu::gpu;

@@ -7,12 +7,17 @@
 //! `ElementSize`), `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`,
 //! `CompressedData`, `BinaryData` (False: ASCII), `HeaderSize` (bytes to
 //! skip in the data file; -1: the data ends the file), and
-//! `ElementNumberOfChannels` (must be 1). Keys are matched without case.
+//! `ElementNumberOfChannels` (must be 1), and the geometry in ITK's LPS
+//! space: `Offset` (or `Position`, `Origin`) and `TransformMatrix` (or
+//! `Rotation`, `Orientation`), whose first three numbers are the
+//! direction of the first axis. Keys are matched without case.
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
 use super::{
-    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, geometry_or_warn,
+    invalid, io_error,
 };
+use crate::field::{Geometry, Space};
 use std::path::Path;
 
 const MAX_HEADER: usize = 1 << 20;
@@ -205,11 +210,38 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Error,
     };
-    let (values, warnings) = read_data(path, &spec)?;
+    let (values, mut warnings) = read_data(path, &spec)?;
     let format = format!(
         "MetaImage ({}, {})",
         if local { ".mha" } else { ".mhd" },
         encoding.name()
     );
-    finish(path, dims, spacing, values, ty, format, opts, warnings)
+    let numbers = |keys: &[&str], want: usize| -> Result<Option<Vec<f64>>, ReadError> {
+        let Some((key, v)) = keys.iter().find_map(|k| get(k).map(|v| (k, v))) else {
+            return Ok(None);
+        };
+        match super::parse_numbers::<f64>(v) {
+            Some(n) if n.len() == want => Ok(Some(n)),
+            _ => Err(invalid(
+                path,
+                format!("bad '{key}': '{}' (expected {want} numbers)", clip(v)),
+            )),
+        }
+    };
+    let origin = numbers(&["Offset", "Position", "Origin"], ndims)?;
+    let matrix = numbers(
+        &["TransformMatrix", "Rotation", "Orientation"],
+        ndims * ndims,
+    )?;
+    let mut o = [0.0; 3];
+    o[..ndims].copy_from_slice(origin.as_deref().unwrap_or(&[0.0; 3][..ndims]));
+    let mut axes = Geometry::IDENTITY.direction;
+    if let Some(m) = &matrix {
+        for (a, axis) in axes.iter_mut().enumerate().take(ndims) {
+            *axis = [0.0; 3];
+            axis[..ndims].copy_from_slice(&m[a * ndims..(a + 1) * ndims]);
+        }
+    }
+    let geometry = geometry_or_warn(o, axes, Space::Lps, &mut warnings);
+    Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))
 }

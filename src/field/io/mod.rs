@@ -7,11 +7,12 @@
 //! |---|---|---|
 //! | NRRD | [`nrrd`] | `.nrrd` (attached), `.nhdr` + data file; raw, gzip, bzip2, ascii |
 //! | MetaImage | [`metaimage`] | `.mha` (attached), `.mhd` + `.raw`/`.zraw` |
-//! | VTK legacy | [`vtk`] | `.vtk` STRUCTURED_POINTS, binary (big-endian) or ASCII |
-//! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw; zlib |
+//! | VTK legacy | [`vtk`] | `.vtk` STRUCTURED_POINTS, SCALARS or COLOR_SCALARS, binary (big-endian) or ASCII |
+//! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw or base64; zlib |
 //! | NIfTI-1 | [`nifti`] | `.nii`, `.nii.gz`, `.hdr` + `.img` |
 //! | raw | [`raw`] | `NAME_XxYxZ_TYPE.raw`, or any file with [`ReadOptions::raw`] |
-//! | image stack | [`stack`] | a folder of 8/16-bit gray PNG or TIFF slices |
+//! | TIFF | [`stack`] | `.tif`, `.tiff`: one grayscale page, or a multi-page 3D volume |
+//! | image stack | [`stack`] | a folder of 8/16-bit gray PNG or grayscale TIFF slices |
 //!
 //! What every reader guarantees:
 //!
@@ -34,6 +35,9 @@
 //! * **64-bit integers** (`int64`, `uint64`) are converted to `float64`,
 //!   since the engine keeps no 64-bit integer type; values beyond 2^53 lose
 //!   precision. [`Volume::scalar_type`] keeps the file's type.
+//! * **Geometry**: origin, axis directions and the space (LPS, RAS) come
+//!   into the field's [`Geometry`] from every format that has them; an
+//!   unusable one (degenerate axes) is a warning and the identity.
 //! * **NaN and infinity** are refused with their count and first position,
 //!   or replaced by the smallest or largest finite value ([`NanPolicy`]).
 
@@ -43,10 +47,11 @@ pub mod nifti;
 pub mod nrrd;
 pub mod raw;
 pub mod stack;
+mod tiff;
 pub mod vti;
 pub mod vtk;
 
-use super::{FieldError, MAX_VERTICES, ScalarField, Values, checked_vertex_count};
+use super::{FieldError, Geometry, MAX_VERTICES, ScalarField, Space, Values, checked_vertex_count};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -161,6 +166,35 @@ pub struct Volume {
     /// Things the reader tolerated (replaced NaNs, padding after the data,
     /// unusable spacing), for the user to see. Sorted by discovery.
     pub warnings: Vec<String>,
+}
+
+impl Volume {
+    /// The volume placed in the world by `geometry`.
+    pub(crate) fn placed(mut self, geometry: Geometry) -> Self {
+        self.field = self.field.with_geometry(geometry);
+        self
+    }
+}
+
+/// The geometry of an origin and three axis vectors (any length) read from
+/// a header, or the identity with a warning when they are unusable (not
+/// finite, or axes that do not span space).
+pub(crate) fn geometry_or_warn(
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    space: Space,
+    warnings: &mut Vec<String>,
+) -> Geometry {
+    match Geometry::new(origin, axes, space) {
+        Ok(g) => g,
+        Err(e) => {
+            warnings.push(format!("{e}; placing the grid at the origin, axis-aligned"));
+            Geometry {
+                space,
+                ..Geometry::IDENTITY
+            }
+        }
+    }
 }
 
 /// Why a volume could not be read.

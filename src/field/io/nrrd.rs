@@ -4,7 +4,9 @@
 //! Read: `type` (every NRRD alias), `dimension` 1 to 3 (missing axes have
 //! size 1), `sizes`, `encoding` raw / gzip / bzip2 / ascii (also `txt`,
 //! `text`, `gz`, `bz2`), `endian`, `spacings` or `space directions` (the
-//! spacing of an axis is the norm of its direction vector), `byte skip`
+//! spacing of an axis is the norm of its direction vector, its direction
+//! in the world the unit vector), `space origin`, `space` (LPS and RAS
+//! named, others unnamed; see [`Geometry`]), `byte skip`
 //! (-1: the data ends the file; raw only), `line skip`, `data file`
 //! (relative to the header's folder). Other fields are ignored; `data file:
 //! LIST` and printf-style file lists are refused.
@@ -15,8 +17,10 @@
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
 use super::{
-    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, geometry_or_warn,
+    invalid, io_error,
 };
+use crate::field::{Geometry, Space};
 use std::io::{BufRead, BufReader, Seek, SeekFrom};
 use std::path::Path;
 
@@ -141,6 +145,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         None => false,
     };
     let mut spacing = [1.0f64; 3];
+    let mut axes = Geometry::IDENTITY.direction;
     if let Some(dirs) = &h.directions {
         if dirs.len() != dimension {
             return Err(invalid(
@@ -151,9 +156,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 ),
             ));
         }
-        for (s, d) in spacing.iter_mut().zip(dirs) {
-            if let Some(norm) = d {
-                *s = *norm;
+        for (a, d) in dirs.iter().enumerate() {
+            if let Some(v) = d {
+                let mut axis = [0.0; 3];
+                for (c, x) in axis.iter_mut().zip(v) {
+                    *c = *x;
+                }
+                spacing[a] = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+                axes[a] = axis;
             }
         }
     } else if let Some(sp) = &h.spacings {
@@ -237,13 +247,25 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         count: n,
         tail: Tail::Error,
     };
-    let (values, warnings) = read_data(path, &spec)?;
+    let (values, mut warnings) = read_data(path, &spec)?;
     let format = format!(
         "NRRD{} ({})",
         if attached { "" } else { " detached" },
         encoding.name()
     );
-    finish(path, dims, spacing, values, ty, format, opts, warnings)
+    let mut origin = [0.0; 3];
+    for (o, x) in origin.iter_mut().zip(h.origin.iter().flatten()) {
+        *o = *x;
+    }
+    let geometry = if h.origin.is_some() || h.directions.is_some() {
+        geometry_or_warn(origin, axes, h.space, &mut warnings)
+    } else {
+        Geometry {
+            space: h.space,
+            ..Geometry::IDENTITY
+        }
+    };
+    Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))
 }
 
 fn is_magic(line: &str) -> bool {
@@ -258,7 +280,10 @@ struct Header {
     encoding: Option<String>,
     endian: Option<String>,
     spacings: Option<Vec<f64>>,
-    directions: Option<Vec<Option<f64>>>,
+    /// Per axis, its vector in space (length = spacing), or None.
+    directions: Option<Vec<Option<Vec<f64>>>>,
+    origin: Option<Vec<f64>>,
+    space: Space,
     byte_skip: i64,
     line_skip: u64,
     data_file: Option<String>,
@@ -295,27 +320,45 @@ impl Header {
                         dirs.push(None);
                         continue;
                     }
-                    let inner = t
-                        .strip_prefix('(')
-                        .and_then(|t| t.strip_suffix(')'))
-                        .ok_or_else(|| bad("expected (x,y,z) vectors"))?;
-                    let comps = inner
-                        .split(',')
-                        .map(|c| c.trim().parse::<f64>().ok())
-                        .collect::<Option<Vec<_>>>()
-                        .ok_or_else(|| bad("not numbers"))?;
-                    let norm = comps.iter().map(|c| c * c).sum::<f64>().sqrt();
-                    dirs.push(Some(norm));
+                    dirs.push(Some(vector(t).map_err(&bad)?));
                 }
                 self.directions = Some(dirs);
+            }
+            "space origin" => {
+                let t: String = value.split_whitespace().collect();
+                self.origin = Some(vector(&t).map_err(&bad)?);
+            }
+            "space" => {
+                self.space = match value.trim().to_ascii_lowercase().as_str() {
+                    "left-posterior-superior" | "lps" => Space::Lps,
+                    "right-anterior-superior" | "ras" => Space::Ras,
+                    _ => Space::Unnamed,
+                }
             }
             "byte skip" => self.byte_skip = value.parse().map_err(|_| bad("not a number"))?,
             "line skip" => self.line_skip = value.parse().map_err(|_| bad("not a number"))?,
             "data file" | "datafile" => self.data_file = Some(value.to_owned()),
-            _ => {} // content, kinds, space, space origin, ...: not needed.
+            _ => {} // content, kinds, measurement frame, ...: not needed.
         }
         Ok(())
     }
+}
+
+/// A NRRD vector `(x,y,z)` (any number of components, at most three).
+fn vector(t: &str) -> Result<Vec<f64>, &'static str> {
+    let inner = t
+        .strip_prefix('(')
+        .and_then(|t| t.strip_suffix(')'))
+        .ok_or("expected (x,y,z) vectors")?;
+    let comps = inner
+        .split(',')
+        .map(|c| c.trim().parse::<f64>().ok())
+        .collect::<Option<Vec<_>>>()
+        .ok_or("not numbers")?;
+    if comps.is_empty() || comps.len() > 3 {
+        return Err("expected vectors of 1 to 3 numbers");
+    }
+    Ok(comps)
 }
 
 /// The offset after `lines` more newlines from `offset` in `file`.

@@ -1,8 +1,9 @@
-//! A folder of 2D slices (PNG or TIFF, 8 or 16-bit grayscale) read as a
-//! volume: one slice per z, in natural file-name order (`slice2` before
-//! `slice10`). Files with other extensions are ignored; every slice must
-//! have the first slice's size and bit depth. A single image file reads as a
-//! volume of depth 1.
+//! A folder of 2D slices (PNG, 8 or 16-bit grayscale; TIFF, any grayscale
+//! type [`super::tiff`] reads) read as a volume: one slice per z, in
+//! natural file-name order (`slice2` before `slice10`). Files with other
+//! extensions are ignored; every slice must have the first slice's size
+//! and type. A single PNG reads as a volume of depth 1; a single TIFF with
+//! all its pages (a multi-page TIFF is a 3D volume).
 
 use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
 use crate::field::Values;
@@ -43,63 +44,113 @@ pub fn read(dir: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     read_files(dir, &files, opts)
 }
 
-/// Reads one image as a volume of depth 1.
+/// Reads one image: a PNG as a volume of depth 1, a TIFF with all its
+/// pages (one per z: a multi-page TIFF is a 3D volume).
 pub fn read_single(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
-    read_files(path, &[path.to_owned()], opts)
+    if !is_tiff(path) {
+        return read_files(path, &[path.to_owned()], opts);
+    }
+    let pages = super::tiff::read(path, |dims, ty| check_dims(path, dims, ty, opts).map(drop))?;
+    let format = match pages.dims[2] {
+        1 => "TIFF (1 page)".to_owned(),
+        n => format!("TIFF ({n} pages)"),
+    };
+    finish(
+        path,
+        pages.dims,
+        [1.0; 3],
+        pages.values,
+        pages.scalar_type,
+        format,
+        opts,
+        Vec::new(),
+    )
 }
 
-fn open(p: &Path) -> Result<image::DynamicImage, ReadError> {
-    image::ImageReader::open(p)
+fn is_tiff(p: &Path) -> bool {
+    let ext = p
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    matches!(ext.as_str(), "tif" | "tiff")
+}
+
+/// One slice: its width, height, values and type.
+fn slice(p: &Path) -> Result<(usize, usize, Values, ScalarType), ReadError> {
+    if is_tiff(p) {
+        let pages = super::tiff::read(p, |_, _| Ok(()))?;
+        if pages.dims[2] != 1 {
+            return Err(invalid(
+                p,
+                format!(
+                    "slice has {} pages: a folder of slices takes one 2D image per file \
+                     (open a multi-page TIFF as a file)",
+                    pages.dims[2]
+                ),
+            ));
+        }
+        return Ok((
+            pages.dims[0],
+            pages.dims[1],
+            pages.values,
+            pages.scalar_type,
+        ));
+    }
+    let img = image::ImageReader::open(p)
         .map_err(|e| io_error(p, e))?
         .with_guessed_format()
         .map_err(|e| io_error(p, e))?
         .decode()
-        .map_err(|e| invalid(p, format!("cannot decode image: {e}")))
+        .map_err(|e| invalid(p, format!("cannot decode image: {e}")))?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    match img {
+        image::DynamicImage::ImageLuma8(b) => Ok((w, h, Values::U8(b.into_raw()), ScalarType::U8)),
+        image::DynamicImage::ImageLuma16(b) => {
+            Ok((w, h, Values::U16(b.into_raw()), ScalarType::U16))
+        }
+        other => Err(invalid(
+            p,
+            format!("slice is {:?}, not 8 or 16-bit grayscale", other.color()),
+        )),
+    }
 }
 
 fn read_files(path: &Path, files: &[PathBuf], opts: &ReadOptions) -> Result<Volume, ReadError> {
-    // Size and depth from the first slice, then one allocation for all.
-    let first = open(&files[0])?;
-    let (w, h) = (first.width() as usize, first.height() as usize);
-    let ty = depth(&files[0], &first)?;
+    // Size and type from the first slice, then one allocation for all.
+    let (w, h, first, ty) = slice(&files[0])?;
     let dims = [w, h, files.len()];
     let n = check_dims(path, dims, ty, opts)?;
-    let mut values = match ty {
-        ScalarType::U8 => Values::U8(Vec::with_capacity(n)),
-        _ => Values::U16(Vec::with_capacity(n)),
-    };
-    let mut push = |p: &Path, img: image::DynamicImage| -> Result<(), ReadError> {
-        if (img.width() as usize, img.height() as usize) != (w, h) {
+    let mut values = first;
+    crate::with_values!(&mut values, v => v.reserve(n.saturating_sub(v.len())));
+    for p in &files[1..] {
+        let (sw, sh, more, sty) = slice(p)?;
+        if (sw, sh) != (w, h) {
             return Err(invalid(
                 p,
-                format!(
-                    "slice is {}x{} but the first slice is {w}x{h}",
-                    img.width(),
-                    img.height()
-                ),
+                format!("slice is {sw}x{sh} but the first slice is {w}x{h}"),
             ));
         }
-        if depth(p, &img)? != ty {
+        if sty != ty {
             return Err(invalid(
                 p,
                 format!(
-                    "slice bit depth differs from the first slice's ({})",
+                    "slice holds {} but the first slice holds {}",
+                    sty.name(),
                     ty.name()
                 ),
             ));
         }
-        match (&mut values, img) {
-            (Values::U8(v), image::DynamicImage::ImageLuma8(b)) => v.extend_from_slice(b.as_raw()),
-            (Values::U16(v), image::DynamicImage::ImageLuma16(b)) => {
-                v.extend_from_slice(b.as_raw())
-            }
-            _ => return Err(invalid(p, "slice is not grayscale")),
+        match (&mut values, more) {
+            (Values::U8(v), Values::U8(m)) => v.extend_from_slice(&m),
+            (Values::I8(v), Values::I8(m)) => v.extend_from_slice(&m),
+            (Values::U16(v), Values::U16(m)) => v.extend_from_slice(&m),
+            (Values::I16(v), Values::I16(m)) => v.extend_from_slice(&m),
+            (Values::U32(v), Values::U32(m)) => v.extend_from_slice(&m),
+            (Values::I32(v), Values::I32(m)) => v.extend_from_slice(&m),
+            (Values::F32(v), Values::F32(m)) => v.extend_from_slice(&m),
+            (Values::F64(v), Values::F64(m)) => v.extend_from_slice(&m),
+            _ => return Err(invalid(p, "slice type differs from the first slice's")),
         }
-        Ok(())
-    };
-    push(&files[0], first)?;
-    for p in &files[1..] {
-        push(p, open(p)?)?;
     }
     let format = if files.len() == 1 && files[0] == path {
         "image (1 slice)".to_owned()
@@ -107,15 +158,4 @@ fn read_files(path: &Path, files: &[PathBuf], opts: &ReadOptions) -> Result<Volu
         format!("image stack ({} slices)", files.len())
     };
     finish(path, dims, [1.0; 3], values, ty, format, opts, Vec::new())
-}
-
-fn depth(p: &Path, img: &image::DynamicImage) -> Result<ScalarType, ReadError> {
-    match img {
-        image::DynamicImage::ImageLuma8(_) => Ok(ScalarType::U8),
-        image::DynamicImage::ImageLuma16(_) => Ok(ScalarType::U16),
-        other => Err(invalid(
-            p,
-            format!("slice is {:?}, not 8 or 16-bit grayscale", other.color()),
-        )),
-    }
 }

@@ -8,19 +8,28 @@
 //!   base64 runs, other writers as one: both are accepted;
 //! * `appended` with `AppendedData encoding="raw"`: raw bytes after the `_`
 //!   mark at the array's `offset`. Large uncompressed appended arrays are
-//!   read straight from the file into the typed values.
+//!   read straight from the file into the typed values;
+//! * `appended` with `encoding="base64"` (what `vtkXMLImageDataWriter`
+//!   writes by default): as inline binary, from the array's `offset` in
+//!   base64 characters.
 //!
 //! With `compressor="vtkZLibDataCompressor"` the data is a block header
 //! (`nblocks, blocksize, lastblocksize, csize...`) then zlib blocks. Other
-//! compressors (LZ4, LZMA) and appended base64 are refused.
+//! compressors (LZ4, LZMA) are refused.
+//!
+//! The grid is placed by `Origin` and `Direction` (row-major: column a is
+//! the direction of axis a) of `ImageData`, and the extent's first index
+//! (see [`Geometry`](crate::field::Geometry)); VTK names no space.
 //!
 //! The XML is scanned by a small tag reader, not a full XML parser: enough
 //! for what VTK and common writers produce.
 
 use super::data::{self, DataError, DataSpec, Encoding, Tail, read_data};
 use super::{
-    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid, io_error,
+    ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, geometry_or_warn,
+    invalid, io_error,
 };
+use crate::field::Space;
 use base64::Engine as _;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -128,6 +137,12 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 struct Layout {
     dims: [usize; 3],
     spacing: [f64; 3],
+    /// World position of the extent's first point, and the axis
+    /// directions (the columns of VTK's row-major `Direction`).
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    /// `AppendedData encoding="base64"` (offsets count base64 characters).
+    appended_base64: bool,
     big_endian: bool,
     header_u64: bool,
     zlib: bool,
@@ -185,6 +200,24 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             let v = data::values_from_bytes(&bytes, ty, layout.big_endian, n).map_err(err)?;
             (v, Vec::new(), "base64")
         }
+        ("appended", _, Some(start)) if layout.appended_base64 => {
+            // The array's characters run from its offset to the closing
+            // tag ('<' is not a base64 character); the decoder stops
+            // after the bytes the header promises.
+            let at = start as u64 + layout.offset;
+            let mut f = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+            f.seek(SeekFrom::Start(at)).map_err(|e| io_error(path, e))?;
+            let mut text = Vec::new();
+            f.take(file_len.saturating_sub(at))
+                .read_to_end(&mut text)
+                .map_err(|e| io_error(path, e))?;
+            let end = text.iter().position(|&c| c == b'<').unwrap_or(text.len());
+            text.truncate(end);
+            text.retain(|c| !c.is_ascii_whitespace());
+            let bytes = decode_inline(path, &text, hw, layout.zlib, layout.big_endian, expected)?;
+            let v = data::values_from_bytes(&bytes, ty, layout.big_endian, n).map_err(err)?;
+            (v, Vec::new(), "appended base64")
+        }
         ("appended", _, Some(start)) => {
             let at = start as u64 + layout.offset;
             let mut f = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
@@ -238,7 +271,9 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         "VTK XML ImageData ({how}{})",
         if layout.zlib { ", zlib" } else { "" }
     );
-    finish(
+    let mut warnings = warnings;
+    let geometry = geometry_or_warn(layout.origin, layout.axes, Space::Unnamed, &mut warnings);
+    Ok(finish(
         path,
         layout.dims,
         layout.spacing,
@@ -247,7 +282,8 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         format,
         opts,
         warnings,
-    )
+    )?
+    .placed(geometry))
 }
 
 /// Scans the XML in `buf`. `Ok(None)` when `buf` is only a prefix and the
@@ -259,6 +295,7 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
     let mut root = None;
     let mut extent = None;
     let mut spacing = [1.0; 3];
+    let mut place = Place::default();
     let mut in_point_data = false;
     let mut wanted: Option<String> = None;
     let mut array: Option<Tag> = None;
@@ -291,6 +328,23 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
                     .attr("WholeExtent")
                     .ok_or_else(|| bad("ImageData without WholeExtent".into()))?;
                 extent = Some(parse_extent(path, we)?);
+                place.first = parse_extent_start(path, we)?;
+                let numbers = |key: &str, want: usize| -> Result<Option<Vec<f64>>, ReadError> {
+                    match tag.attr(key) {
+                        None => Ok(None),
+                        Some(t) => match super::parse_numbers::<f64>(t) {
+                            Some(v) if v.len() == want => Ok(Some(v)),
+                            _ => Err(bad(format!("bad {key} '{}' ({want} numbers)", clip(t)))),
+                        },
+                    }
+                };
+                if let Some(o) = numbers("Origin", 3)? {
+                    place.origin = [o[0], o[1], o[2]];
+                }
+                if let Some(d) = numbers("Direction", 9)? {
+                    // Row-major: column a is the direction of axis a.
+                    place.axes = std::array::from_fn(|a| [d[a], d[3 + a], d[6 + a]]);
+                }
                 if let Some(s) = tag.attr("Spacing") {
                     let s: Vec<f64> = super::parse_numbers(s)
                         .ok_or_else(|| bad(format!("bad Spacing '{}'", clip(s))))?;
@@ -338,11 +392,16 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
                 let Some(array) = &array else {
                     return Err(bad("no point-data DataArray found".into()));
                 };
-                if tag.attr("encoding").unwrap_or("raw") != "raw" {
-                    return Err(bad(
-                        "appended base64 data is not supported (only encoding=\"raw\")".into(),
-                    ));
-                }
+                place.base64 = match tag.attr("encoding").unwrap_or("raw") {
+                    "raw" => false,
+                    "base64" => true,
+                    o => {
+                        return Err(bad(format!(
+                            "AppendedData encoding '{}' is not supported (raw or base64)",
+                            clip(o)
+                        )));
+                    }
+                };
                 let Some(us) = buf[tag.end..].iter().position(|&c| c == b'_') else {
                     return Err(bad("AppendedData has no '_' mark".into()));
                 };
@@ -350,7 +409,7 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
                     path,
                     root,
                     extent,
-                    spacing,
+                    (spacing, place),
                     array,
                     inline,
                     Some(tag.end + us + 1),
@@ -362,7 +421,28 @@ fn scan(path: &Path, buf: &[u8], whole: bool) -> Result<Option<Layout>, ReadErro
         if let Some(a) = &array
             && a.attr("format") != Some("appended")
         {
-            return finish_scan(path, root, extent, spacing, a, inline, None).map(Some);
+            return finish_scan(path, root, extent, (spacing, place), a, inline, None).map(Some);
+        }
+    }
+}
+
+/// Where the ImageData sits: its origin, direction and first extent index,
+/// and how appended data is encoded.
+#[derive(Clone, Copy)]
+struct Place {
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    first: [i64; 3],
+    base64: bool,
+}
+
+impl Default for Place {
+    fn default() -> Self {
+        Place {
+            origin: [0.0; 3],
+            axes: crate::field::Geometry::IDENTITY.direction,
+            first: [0; 3],
+            base64: false,
         }
     }
 }
@@ -371,7 +451,7 @@ fn finish_scan(
     path: &Path,
     root: Option<Tag>,
     extent: Option<[usize; 3]>,
-    spacing: [f64; 3],
+    (spacing, place): ([f64; 3], Place),
     array: &Tag,
     inline: Option<(usize, usize)>,
     appended_start: Option<usize>,
@@ -435,9 +515,20 @@ fn finish_scan(
             .map_err(|_| invalid(path, format!("bad DataArray offset '{}'", clip(o))))?,
         None => 0,
     };
+    // The extent's first point: origin + D · (first × spacing).
+    let d = &place.axes;
+    let origin = std::array::from_fn(|c| {
+        place.origin[c]
+            + (0..3)
+                .map(|a| place.first[a] as f64 * spacing[a] * d[a][c])
+                .sum::<f64>()
+    });
     Ok(Layout {
         dims,
         spacing,
+        origin,
+        axes: place.axes,
+        appended_base64: place.base64,
         big_endian,
         header_u64,
         zlib,
@@ -447,6 +538,16 @@ fn finish_scan(
         offset,
         appended_start,
     })
+}
+
+/// The first index of each axis of an extent `x0 x1 y0 y1 z0 z1`.
+fn parse_extent_start(path: &Path, text: &str) -> Result<[i64; 3], ReadError> {
+    let e: Vec<i64> = super::parse_numbers(text)
+        .ok_or_else(|| invalid(path, format!("bad extent '{}'", clip(text))))?;
+    match e[..] {
+        [x0, _, y0, _, z0, _] => Ok([x0, y0, z0]),
+        _ => Err(invalid(path, format!("bad extent '{}'", clip(text)))),
+    }
 }
 
 fn parse_extent(path: &Path, text: &str) -> Result<[usize; 3], ReadError> {

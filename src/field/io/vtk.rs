@@ -1,9 +1,13 @@
 //! VTK legacy files (`.vtk`), `DATASET STRUCTURED_POINTS` only: the first
-//! `SCALARS` array of `POINT_DATA`, binary (big-endian, as the VTK file
-//! format specifies) or ASCII.
+//! `SCALARS` or `COLOR_SCALARS` array of `POINT_DATA`, binary (big-endian,
+//! as the VTK file format specifies) or ASCII.
 //!
 //! The header is the lines up to the `LOOKUP_TABLE` line that follows
-//! `SCALARS` (required by the spec); binary data starts on the next byte.
+//! `SCALARS` (required by the spec), or up to a `COLOR_SCALARS name 1`
+//! line (what `vtkStructuredPointsWriter` writes for uint8 data: binary
+//! bytes; in ASCII, floats in [0, 1]); binary data starts on the next byte.
+//! The grid is placed at `ORIGIN`, axis-aligned (the format has no
+//! direction), in no named space.
 //! Anything after the array (more arrays) is ignored. `DIMENSIONS`,
 //! `SPACING` (or the old `ASPECT_RATIO`) and `ORIGIN` may come in any order;
 //! keywords are matched without case. `long` and `unsigned_long` are read as
@@ -11,6 +15,7 @@
 
 use super::data::{DataSpec, Encoding, Tail, read_data};
 use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, clip, finish, invalid};
+use crate::field::Geometry;
 use std::path::Path;
 
 const MAX_HEADER: usize = 1 << 20;
@@ -38,7 +43,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             after_scalars = true;
             return false;
         }
-        after_scalars && kw == "LOOKUP_TABLE"
+        (after_scalars && kw == "LOOKUP_TABLE") || kw == "COLOR_SCALARS"
     })?;
     if not_vtk {
         return Err(invalid(
@@ -49,7 +54,8 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     if data_offset == usize::MAX {
         return Err(invalid(
             path,
-            "no 'SCALARS name type' followed by 'LOOKUP_TABLE' line: no point scalars to read",
+            "no 'SCALARS name type' followed by 'LOOKUP_TABLE' line, nor 'COLOR_SCALARS name 1': \
+             no point scalars to read",
         ));
     }
     let mut it = lines
@@ -70,6 +76,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     };
     let mut dims: Option<[usize; 3]> = None;
     let mut spacing = [1.0f64; 3];
+    let mut origin = [0.0f64; 3];
     let mut point_data: Option<usize> = None;
     let mut scalar_type: Option<ScalarType> = None;
     for line in it {
@@ -107,7 +114,13 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 };
                 spacing = [x, y, z];
             }
-            "ORIGIN" => {}
+            "ORIGIN" => {
+                let o: Vec<f64> = parse_all(&rest).ok_or_else(|| bad("expected three numbers"))?;
+                let [x, y, z] = o[..] else {
+                    return Err(bad("expected three numbers"));
+                };
+                origin = [x, y, z];
+            }
             "POINT_DATA" => {
                 let [n] = rest[..] else {
                     return Err(bad("expected a count"));
@@ -161,6 +174,23 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 scalar_type = Some(ty);
             }
             "LOOKUP_TABLE" => {}
+            "COLOR_SCALARS" if point_data.is_some() && scalar_type.is_none() => {
+                if let Some(c) = rest.get(1)
+                    && *c != "1"
+                {
+                    return Err(invalid(
+                        path,
+                        format!(
+                            "COLOR_SCALARS with {} components is not supported (scalar data only)",
+                            clip(c)
+                        ),
+                    ));
+                }
+                scalar_type = Some(match encoding {
+                    Encoding::Ascii => ScalarType::F32,
+                    _ => ScalarType::U8,
+                });
+            }
             "FIELD"
             | "VECTORS"
             | "NORMALS"
@@ -211,7 +241,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             "ascii"
         }
     );
-    finish(path, dims, spacing, values, ty, format, opts, warnings)
+    let geometry = Geometry {
+        origin,
+        ..Geometry::IDENTITY
+    };
+    if !origin.iter().all(|c| c.is_finite()) {
+        return Err(invalid(path, "ORIGIN is not finite"));
+    }
+    Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))
 }
 
 fn parse_all<T: std::str::FromStr>(tokens: &[&str]) -> Option<Vec<T>> {
