@@ -9,13 +9,14 @@
 //! superarc of the chain spanning h).
 
 use std::collections::HashMap;
-use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Mutex};
 
 use egui::Color32;
 
 use super::view3d::prepare;
 
+use crate::contour::follow::Cancelled;
 use crate::contour::{
     ContourFollower, ContourMesh, FollowerScratch, Isovalue, MeshTopology, path_seed,
 };
@@ -118,6 +119,9 @@ enum Done {
 pub struct Extractor {
     tx: Sender<Job>,
     rx: Receiver<Done>,
+    /// The newest request sent per contour: an extraction whose request
+    /// is no longer the newest stops (the follower asks while it floods).
+    newest: Arc<Mutex<HashMap<u64, u64>>>,
 }
 
 impl std::fmt::Debug for Extractor {
@@ -132,6 +136,8 @@ impl Extractor {
     pub fn new(notify: Option<Arc<dyn Fn() + Send + Sync>>) -> Self {
         let (tx, jobs) = channel::<Job>();
         let (done_tx, rx) = channel::<Done>();
+        let newest: Arc<Mutex<HashMap<u64, u64>>> = Arc::default();
+        let sent = Arc::clone(&newest);
         let _ = std::thread::Builder::new()
             .name("flexiso-extract".into())
             .spawn(move || {
@@ -145,8 +151,11 @@ impl Extractor {
                 // Newest request per contour, and meshes still to measure.
                 let mut latest: HashMap<u64, Job> = HashMap::new();
                 let mut to_measure: Vec<(u64, u64, Arc<ContourMesh>)> = Vec::new();
-                // The follower's tables, kept from one job to the next.
+                // The follower's tables, kept from one job to the next,
+                // and the size of each contour's last mesh (the follower
+                // takes a large one straight to the parallel sweep).
                 let mut scratch = FollowerScratch::default();
+                let mut sizes: HashMap<u64, usize> = HashMap::new();
                 loop {
                     if latest.is_empty() && to_measure.is_empty() {
                         match jobs.recv() {
@@ -165,9 +174,31 @@ impl Extractor {
                         batch.sort_by_key(|j| j.id);
                         for j in batch {
                             let t = std::time::Instant::now();
-                            let mesh =
-                                extract_mesh(&j.field, &j.tree, j.superarc, j.h, &mut scratch)
-                                    .map(Arc::new);
+                            // Superseded: a newer request for this contour
+                            // waits in the channel (a poisoned lock cancels
+                            // nothing).
+                            let (id, request) = (j.id, j.request);
+                            let cancel = || {
+                                sent.lock()
+                                    .is_ok_and(|m| m.get(&id).is_some_and(|&r| r != request))
+                            };
+                            let Ok(mesh) = extract_mesh(
+                                &j.field,
+                                &j.tree,
+                                j.superarc,
+                                j.h,
+                                &mut scratch,
+                                sizes.get(&j.id).copied(),
+                                &cancel,
+                            ) else {
+                                // Nothing sent: the old mesh stays drawn
+                                // until the newer request's is complete.
+                                continue;
+                            };
+                            if let Some(m) = &mesh {
+                                sizes.insert(j.id, m.num_triangles());
+                            }
+                            let mesh = mesh.map(Arc::new);
                             let ms = t.elapsed().as_secs_f64() * 1e3;
                             let gpu = mesh.as_deref().and_then(prepare);
                             if let Some(m) = &mesh {
@@ -199,7 +230,7 @@ impl Extractor {
                     }
                 }
             });
-        Self { tx, rx }
+        Self { tx, rx, newest }
     }
 }
 
@@ -305,6 +336,9 @@ impl Selection {
         c.requested += 1;
         match &self.extractor {
             Some(e) => {
+                if let Ok(mut m) = e.newest.lock() {
+                    m.insert(c.id, c.requested);
+                }
                 let job = Job {
                     id: c.id,
                     request: c.requested,
@@ -482,13 +516,18 @@ fn extract_mesh(
     superarc: ArcId,
     h: f64,
     scratch: &mut FollowerScratch,
-) -> Option<ContourMesh> {
+    expected: Option<usize>,
+    cancel: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<ContourMesh>, Cancelled> {
     let iso = Isovalue::new(h);
-    let seed = path_seed(tree, field, superarc, iso)?;
+    let Some(seed) = path_seed(tree, field, superarc, iso) else {
+        return Ok(None);
+    };
+    // On every core for a large contour (see ContourFollower::extract).
     let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
-    let mesh = follower.follow(&seed, iso);
+    let mesh = follower.extract_expecting(&seed, iso, expected, cancel);
     *scratch = follower.into_scratch();
-    Some(mesh)
+    mesh.map(Some)
 }
 
 /// Extracts the contour of `c.superarc` at `c.h` into `c`, at once.
@@ -500,7 +539,10 @@ pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
         c.superarc,
         c.h,
         &mut FollowerScratch::default(),
-    );
+        None,
+        &|| false,
+    )
+    .unwrap_or(None);
     c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
     c.topology = mesh
         .as_ref()
