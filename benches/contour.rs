@@ -162,8 +162,196 @@ fn quick() {
             rayon::current_num_threads(),
             t_followed
         );
-        drag_latency(&name, &tree, &field);
+        serial_vs_parallel(&name, &tree, &field, iso, &seed);
+        scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
+        drag_latency(&name, &tree, &field, 150_000..=250_000);
+        drag_latency(&name, &tree, &field, 500_000..=1_000_000);
     }
+}
+
+/// CPU seconds of the whole process so far (every thread), if known: on a
+/// shared machine, what the parallel work itself cost.
+fn process_cpu() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i)?.parse::<f64>().ok();
+    // utime and stime, fields 14 and 15 (11 and 12 after the name).
+    Some((ticks(11)? + ticks(12)?) / 100.0)
+}
+
+/// The mesh made ready for the GPU, as the explorer's worker does.
+fn prepare(mesh: &flexiso::contour::ContourMesh) -> flexiso::render::PreparedMesh {
+    flexiso::render::PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices)
+        .expect("a contour is a valid mesh")
+}
+
+/// The largest contour followed on one thread and extracted on every core
+/// (in the same run: the machine is shared), and the time from the new
+/// isovalue to the mesh ready for upload (seed, extraction, preparation).
+fn serial_vs_parallel(
+    name: &str,
+    tree: &ContourTree,
+    field: &ScalarField,
+    iso: Isovalue,
+    seed: &PathSeed,
+) {
+    let seeds = PathSeeds::new();
+    let mut serial = ContourFollower::new(field);
+    let mut parallel = ContourFollower::new(field);
+    let mut triangles = 0;
+    let t_serial = best_of(5, || {
+        triangles = black_box(serial.follow(seed, iso)).num_triangles();
+    });
+    let cpu0 = process_cpu();
+    let t_parallel = best_of(5, || {
+        black_box(
+            parallel
+                .extract(seed, iso, &|| false)
+                .expect("not cancelled"),
+        );
+    });
+    let cpu_parallel = cpu0
+        .zip(process_cpu())
+        .map_or(f64::NAN, |(a, b)| (b - a) / 5.0);
+    let cpu0 = process_cpu();
+    let m = parallel
+        .extract(seed, iso, &|| false)
+        .expect("not cancelled");
+    let cpu1 = process_cpu();
+    for _ in 0..4 {
+        black_box(prepare(&m));
+    }
+    let cpu_prepare = cpu1
+        .zip(process_cpu())
+        .map_or(f64::NAN, |(a, b)| (b - a) / 4.0);
+    let _ = cpu0;
+    let mut t_prepare = f64::INFINITY;
+    let t_ready = best_of(5, || {
+        let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
+        let m = parallel.extract(&s, iso, &|| false).expect("not cancelled");
+        let t = Instant::now();
+        black_box(prepare(&m));
+        t_prepare = t_prepare.min(t.elapsed().as_secs_f64());
+    });
+    println!(
+        "{name} h = {}: the largest contour ({triangles} triangles): following it {:.0} ms \
+         (one thread), extracting it {:.0} ms ({} threads, {:.1}x); new isovalue to mesh \
+         ready for upload {:.0} ms (of which preparing it {:.0} ms); CPU time (all threads) \
+         of one extraction {:.0} ms, of one preparation {:.0} ms",
+        iso.value,
+        t_serial * 1e3,
+        t_parallel * 1e3,
+        rayon::current_num_threads(),
+        t_serial / t_parallel,
+        t_ready * 1e3,
+        t_prepare * 1e3,
+        cpu_parallel * 1e3,
+        cpu_prepare * 1e3,
+    );
+}
+
+/// A scripted drag of `steps` steps of one value unit along `arc` from
+/// `iso` (towards the arc's farther end): per step, the new isovalue to
+/// the mesh ready for upload, by the serial follower and by the parallel
+/// extraction, and with a GPU the frames the upload takes within the
+/// explorer's per-frame budget.
+fn scripted_drag(
+    name: &str,
+    tree: &ContourTree,
+    field: &ScalarField,
+    iso: Isovalue,
+    arc: flexiso::tree::ArcId,
+    steps: usize,
+) {
+    // Upwards: the head's outer surface shrinks towards the skull. The
+    // marker moves along the arc's chain at a simplification level of 100
+    // arcs (by volume), as in the explorer: past the tree's many small
+    // nodes the contour stays the head's.
+    let dir = 1.0;
+    let start = arc;
+    let sim = std::sync::Arc::new(flexiso::simplify::Simplification::new(
+        tree,
+        field,
+        flexiso::simplify::Measure::Volume,
+    ));
+    let mut level = flexiso::simplify::SimplifiedTree::new(sim);
+    level.set_level(100);
+    let chain: Vec<flexiso::tree::ArcId> = match level.live_arc_of(arc) {
+        Some(a) => level.arc(a).chain.to_vec(),
+        None => vec![arc],
+    };
+    let gpu = flexiso::render::headless::Gpu::new().ok();
+    let mut renderer = gpu.as_ref().map(|g| g.renderer());
+    let budget = flexiso::app::panels::view3d::UPLOAD_BUDGET;
+    let mut serial = ContourFollower::new(field);
+    let mut parallel = ContourFollower::new(field);
+    let (mut ser, mut par, mut frames, mut upload) = (vec![], vec![], vec![], vec![]);
+    let mut sizes = (usize::MAX, 0);
+    let mut last = None;
+    for step in 1..=steps {
+        let iso = Isovalue::new(iso.value + dir * step as f64);
+        let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso) else {
+            break;
+        };
+        let arc = seed.arc;
+        let t = Instant::now();
+        let m = serial.follow(&seed, iso);
+        black_box(prepare(&m));
+        ser.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let seed = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso).expect("spans");
+        debug_assert_eq!(seed.arc, arc);
+        // As the explorer's worker: the last step's size as the hint.
+        let m = parallel
+            .extract_expecting(&seed, iso, last, &|| false)
+            .expect("not cancelled");
+        last = Some(m.num_triangles());
+        let prepared = prepare(&m);
+        par.push(t.elapsed().as_secs_f64() * 1e3);
+        sizes = (
+            sizes.0.min(m.num_triangles()),
+            sizes.1.max(m.num_triangles()),
+        );
+        if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
+            r.set_prepared_mesh(&g.device, 1, std::sync::Arc::new(prepared))
+                .expect("upload");
+            let mut n = 0;
+            let mut slowest = 0f64;
+            loop {
+                let t = Instant::now();
+                let more = r.upload_pending(&g.device, &g.queue, budget);
+                let _ = g.device.poll(wgpu::PollType::wait_indefinitely());
+                slowest = slowest.max(t.elapsed().as_secs_f64() * 1e3);
+                n += 1;
+                if !more {
+                    break;
+                }
+            }
+            frames.push(n as f64);
+            upload.push(slowest);
+        }
+    }
+    let stats = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        (
+            v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
+            v.last().copied().unwrap_or(f64::NAN),
+        )
+    };
+    let ((sm, sw), (pm, pw)) = (stats(&ser), stats(&par));
+    let ((fm, fw), (um, uw)) = (stats(&frames), stats(&upload));
+    println!(
+        "{name}: scripted drag of {} steps of {dir:+} from h = {} from arc {start:?} \
+         ({}..{} triangles): new isovalue to mesh ready for upload, median / worst step: \
+         serial {sm:.0} / {sw:.0} ms, parallel {pm:.0} / {pw:.0} ms; upload in {fm} / {fw} \
+         frames of at most {} MiB, slowest frame's copy {um:.1} / {uw:.1} ms",
+        par.len(),
+        iso.value,
+        sizes.0,
+        sizes.1,
+        budget >> 20,
+    );
 }
 
 /// What dragging a contour's isovalue costs before the new mesh can be
@@ -171,7 +359,12 @@ fn quick() {
 /// the first isovalue, from the top, that has one of 150k to 250k) moved by
 /// steps down its arc: path seed, following, and the upload to the GPU
 /// (headless wgpu, software Vulkan here), then one 1280×800 render.
-fn drag_latency(name: &str, tree: &ContourTree, field: &ScalarField) {
+fn drag_latency(
+    name: &str,
+    tree: &ContourTree,
+    field: &ScalarField,
+    band: std::ops::RangeInclusive<usize>,
+) {
     let (lo, hi) = field.range();
     let seeds = PathSeeds::new();
     let mut follower = ContourFollower::new(field);
@@ -183,47 +376,49 @@ fn drag_latency(name: &str, tree: &ContourTree, field: &ScalarField) {
                 continue;
             };
             let n = follower.follow(&seed, iso).num_triangles();
-            if (150_000..=250_000).contains(&n) {
+            if band.contains(&n) {
                 found = Some((arc, iso.value));
                 break 'search;
             }
         }
     }
     let Some((arc, h)) = found else {
-        println!("{name}: no contour of 150k-250k triangles at the isovalues tried");
+        println!("{name}: no contour of {band:?} triangles at the isovalues tried");
         return;
     };
     let gpu = flexiso::render::headless::Gpu::new().ok();
     let mut renderer = gpu.as_ref().map(|g| g.renderer());
-    let mut worst = (0f64, 0f64, 0f64, 0usize);
+    let mut worst = (0f64, 0f64, 0f64, 0usize, 0usize);
     // Five drag steps down the arc, towards its lower end.
     let bottom = field.value(tree.node(tree.arc(arc).lower).vertex);
+    let mut last = None;
     for step in 0..5 {
         let iso = Isovalue::new(h - (h - bottom) * step as f64 / 6.0);
         let t = Instant::now();
         let Some(seed) = seeds.seed(tree, field, arc, iso) else {
             break;
         };
-        let mesh = follower.follow(&seed, iso);
+        let mesh = follower
+            .extract_expecting(&seed, iso, last, &|| false)
+            .expect("not cancelled");
+        last = Some(mesh.num_triangles());
         // As the explorer's worker does: the mesh is made ready for the
         // GPU on the extracting thread, the UI thread only copies it.
-        let prepared =
-            flexiso::render::PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices)
-                .expect("a contour is a valid mesh");
+        let prepared = prepare(&mesh);
         let extract = t.elapsed().as_secs_f64() * 1e3;
-        let (mut upload, mut render) = (0.0, 0.0);
+        let (mut upload, mut render, mut frames) = (0.0, 0.0, 0);
         if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
             let t = Instant::now();
             r.set_prepared_mesh(&g.device, 1, std::sync::Arc::new(prepared))
                 .expect("upload");
-            assert!(
-                !r.upload_pending(
-                    &g.device,
-                    &g.queue,
-                    flexiso::app::panels::view3d::UPLOAD_BUDGET
-                ),
-                "one frame's budget"
-            );
+            frames = 1;
+            while r.upload_pending(
+                &g.device,
+                &g.queue,
+                flexiso::app::panels::view3d::UPLOAD_BUDGET,
+            ) {
+                frames += 1;
+            }
             let _ = g.device.poll(wgpu::PollType::wait_indefinitely());
             upload = t.elapsed().as_secs_f64() * 1e3;
             let mut camera = flexiso::render::Camera::default();
@@ -236,16 +431,18 @@ fn drag_latency(name: &str, tree: &ContourTree, field: &ScalarField) {
             render = t.elapsed().as_secs_f64() * 1e3;
         }
         if extract + upload > worst.0 + worst.1 {
-            worst = (extract, upload, render, mesh.num_triangles());
+            worst = (extract, upload, render, mesh.num_triangles(), frames);
         }
     }
     println!(
         "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
-         worst step extraction (and preparation) {:.1} ms + upload {:.1} ms = {:.1} ms; its render {:.1} ms ({})",
+         worst step extraction (and preparation) {:.1} ms + upload {:.1} ms ({} frames) = {:.1} ms; \
+         its render {:.1} ms ({})",
         worst.3,
         arc,
         worst.0,
         worst.1,
+        worst.4,
         worst.0 + worst.1,
         worst.2,
         gpu.as_ref()

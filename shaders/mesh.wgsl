@@ -19,14 +19,21 @@ struct Style {
     colour: vec4<f32>,
     // x: 1 when highlighted.
     flags: vec4<f32>,
+    // xyz: world position of quantised 0.
+    origin: vec4<f32>,
+    // xyz: world units per quantisation step.
+    scale: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(1) @binding(0) var<uniform> style: Style;
 
+// The compact vertex (GpuVertex in src/render/geometry.rs): position
+// quantised to 16 bits in the mesh's box (Unorm16x4, read as q / 65535),
+// normal in the octahedral encoding (Snorm16x2).
 struct VsIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
+    @location(0) position: vec4<f32>,
+    @location(1) normal: vec2<f32>,
 };
 
 struct VsOut {
@@ -35,12 +42,23 @@ struct VsOut {
     @location(1) normal: vec3<f32>,
 };
 
+// The unit vector of an octahedral encoding (Cigolle et al., JCGT 2014).
+fn decode_normal(e: vec2<f32>) -> vec3<f32> {
+    let f = clamp(e, vec2<f32>(-1.0), vec2<f32>(1.0));
+    var n = vec3<f32>(f.x, f.y, 1.0 - abs(f.x) - abs(f.y));
+    let t = max(-n.z, 0.0);
+    n.x += select(t, -t, n.x >= 0.0);
+    n.y += select(t, -t, n.y >= 0.0);
+    return normalize(n);
+}
+
 @vertex
 fn vs_main(in: VsIn) -> VsOut {
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(in.position, 1.0);
-    out.world = in.position;
-    out.normal = in.normal;
+    let world = style.origin.xyz + in.position.xyz * 65535.0 * style.scale.xyz;
+    out.clip = frame.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.normal = decode_normal(in.normal);
     return out;
 }
 

@@ -87,3 +87,77 @@ fn fuel_contours_match_marching_tetrahedra_and_betti() {
 fn neghip_contours_match_marching_tetrahedra_and_betti() {
     check_dataset("neghip.nrrd", &[30.0, 80.0, 150.0]);
 }
+
+/// The parallel extraction (through the sweep) against the serial
+/// follower on a scan: at each isovalue, every contour of at least
+/// `min_triangles` (the largest one always) has the same triangles (as
+/// position triples), as many shared vertices, the same boundary flag and
+/// topology, and the Euler characteristic the tree predicts.
+fn check_parallel_extraction(name: &str, isovalues: &[f64], min_triangles: usize) {
+    use flexiso::contour::{ContourFollower, PathSeeds};
+    let Some(path) = common::dataset(name) else {
+        return;
+    };
+    let field = read_volume(&path, &ReadOptions::default())
+        .expect("readable")
+        .field;
+    let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+    let betti = ContourTopology::new(&tree, &field);
+    let seeds = PathSeeds::new();
+    let mut oracle = ContourFollower::new(&field);
+    let mut fast = ContourFollower::new(&field).with_serial_limit(0);
+    let soup = |c: &flexiso::contour::ContourMesh| {
+        let mut s: Vec<[[u32; 3]; 3]> = c
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let p = [0, 1, 2].map(|i| c.positions[t[i] as usize].map(f32::to_bits));
+                let k = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
+                [p[k], p[(k + 1) % 3], p[(k + 2) % 3]]
+            })
+            .collect();
+        s.sort_unstable();
+        s
+    };
+    for &h in isovalues {
+        let iso = Isovalue::new(h);
+        let mut followed: Vec<_> = flexiso::contour::global::spanning_arcs(&tree, &field, iso)
+            .into_iter()
+            .filter_map(|a| seeds.seed(&tree, &field, a, iso))
+            .map(|s| (s, oracle.follow(&s, iso)))
+            .collect();
+        followed.sort_by_key(|(_, c)| std::cmp::Reverse(c.num_triangles()));
+        for (k, (seed, want)) in followed.iter().enumerate() {
+            if k > 0 && want.num_triangles() < min_triangles {
+                break;
+            }
+            let at = format!("{name} h = {h}, arc {:?}", seed.arc);
+            let got = fast.extract(seed, iso, &|| false).expect("not cancelled");
+            assert_eq!(got.positions.len(), want.positions.len(), "{at}: vertices");
+            assert_eq!(got.normals.len(), got.positions.len(), "{at}: normals");
+            assert_eq!(got.touches_boundary, want.touches_boundary, "{at}");
+            assert!(soup(&got) == soup(want), "{at}: the same triangles");
+            let (a, b) = (
+                MeshTopology::of(&got.positions, &got.indices),
+                MeshTopology::of(&want.positions, &want.indices),
+            );
+            assert_eq!(
+                (a.euler, a.components, a.edges),
+                (b.euler, b.components, b.edges)
+            );
+            assert_eq!(a.euler, betti.at(seed.arc, &field, iso).euler, "{at}: χ");
+        }
+    }
+}
+
+#[test]
+fn parallel_extraction_matches_following_on_neghip_and_fuel() {
+    check_parallel_extraction("neghip.nrrd", &[30.0, 80.0, 150.0], 100);
+    check_parallel_extraction("fuel.nrrd", &[10.0, 50.0, 99.5], 100);
+}
+
+#[test]
+fn parallel_extraction_matches_following_on_the_colin27_head() {
+    // 64.5: the head's contour, 5.36 M triangles.
+    check_parallel_extraction("colin27_ch2.nrrd", &[64.5], 200_000);
+}

@@ -386,3 +386,182 @@ proptest! {
         }
     }
 }
+
+/// Checks that `extract` (on every core, through the sweep when
+/// `serial_limit` is 0) gives the contour `follow` gives: the same
+/// oriented triangles on as many shared vertices, the same boundary flag,
+/// the same topology, and at each position the same unit normal (up to
+/// the order the area-weighted sums were added in).
+fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
+    assert_eq!(fast.arc, oracle.arc, "{at}: arc");
+    assert_eq!(
+        fast.positions.len(),
+        oracle.positions.len(),
+        "{at}: shared vertices"
+    );
+    assert_eq!(fast.normals.len(), fast.positions.len(), "{at}: normals");
+    assert_eq!(
+        fast.touches_boundary, oracle.touches_boundary,
+        "{at}: boundary"
+    );
+    assert_eq!(
+        triangle_soup(fast),
+        triangle_soup(oracle),
+        "{at}: the same oriented triangles"
+    );
+    let (a, b) = (
+        MeshTopology::of(&fast.positions, &fast.indices),
+        MeshTopology::of(&oracle.positions, &oracle.indices),
+    );
+    assert_eq!(
+        (a.euler, a.components, a.vertices, a.edges, a.boundary_edges),
+        (b.euler, b.components, b.vertices, b.edges, b.boundary_edges),
+        "{at}: topology"
+    );
+    let by_position = |m: &ContourMesh| {
+        let mut v: Vec<([u32; 3], [f32; 3])> = m
+            .positions
+            .iter()
+            .zip(&m.normals)
+            .map(|(p, n)| (p.map(f32::to_bits), *n))
+            .collect();
+        v.sort_unstable_by(|x, y| {
+            x.0.cmp(&y.0).then(
+                x.1.iter()
+                    .zip(&y.1)
+                    .fold(std::cmp::Ordering::Equal, |o, (a, b)| {
+                        o.then(a.total_cmp(b))
+                    }),
+            )
+        });
+        v
+    };
+    let (pa, pb) = (by_position(fast), by_position(oracle));
+    let mut far = 0;
+    for ((p, n), (q, m)) in pa.iter().zip(&pb) {
+        assert_eq!(p, q, "{at}: the same vertex positions");
+        let d = (0..3).map(|k| (n[k] - m[k]).abs()).fold(0f32, f32::max);
+        far += usize::from(d > 1e-3);
+    }
+    // Vertices at one position (an edge end reached by several edges)
+    // may pair their normals differently after sorting; nowhere else.
+    assert!(
+        far * 1000 <= pa.len().max(1000),
+        "{at}: {far} of {} normals differ",
+        pa.len()
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// The parallel extraction (forced through the sweep) gives every
+    /// spanning arc's contour as the serial follower does, with the
+    /// Euler characteristic the tree predicts.
+    #[test]
+    fn parallel_extraction_matches_the_follower_on_random_grids(
+        field in random_field(),
+        h in 0u32..14,
+    ) {
+        let tree = tree_of(&field);
+        let betti = ContourTopology::new(&tree, &field);
+        let iso = Isovalue::new(h as f64 / 2.0);
+        let mut oracle = ContourFollower::new(&field);
+        let mut fast = ContourFollower::new(&field).with_serial_limit(0);
+        for arc in 0..tree.arcs().len() as u32 {
+            let Some(seed) = path_seed(&tree, &field, ArcId(arc), iso) else {
+                continue;
+            };
+            let want = oracle.follow(&seed, iso);
+            let got = fast.extract(&seed, iso, &|| false).expect("not cancelled");
+            assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}"));
+            let t = MeshTopology::of(&got.positions, &got.indices);
+            prop_assert_eq!(t.euler, betti.at(ArcId(arc), &field, iso).euler);
+        }
+    }
+
+    #[test]
+    fn parallel_extraction_matches_the_follower_on_noisy_float_grids(
+        dims in (3usize..12, 3usize..12, 3usize..12),
+        seed in any::<u64>(),
+        t in 0.0f64..1.0,
+        limit in prop_oneof![Just(0usize), Just(20), Just(usize::MAX)],
+    ) {
+        let n = dims.0 * dims.1 * dims.2;
+        let mut s = seed | 1;
+        let values: Vec<f32> = (0..n).map(|_| {
+            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }).collect();
+        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let tree = tree_of(&field);
+        let betti = ContourTopology::new(&tree, &field);
+        let iso = Isovalue::new(t);
+        let mut oracle = ContourFollower::new(&field);
+        let mut fast = ContourFollower::new(&field).with_serial_limit(limit);
+        for arc in 0..tree.arcs().len() as u32 {
+            let Some(seed) = path_seed(&tree, &field, ArcId(arc), iso) else {
+                continue;
+            };
+            let want = oracle.follow(&seed, iso);
+            let got = fast.extract(&seed, iso, &|| false).expect("not cancelled");
+            assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}"));
+            let t = MeshTopology::of(&got.positions, &got.indices);
+            prop_assert_eq!(t.euler, betti.at(ArcId(arc), &field, iso).euler);
+        }
+    }
+}
+
+/// Cancellation: a request cancelled before it starts, in the flood, or
+/// in any phase of the sweep returns no mesh at all, and the follower's
+/// next extraction is whole and right.
+#[test]
+fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let field = flexiso::field::synthetic::Synthetic::cube(96).generate();
+    let tree = tree_of(&field);
+    let (lo, hi) = field.range();
+    let mut follower = ContourFollower::new(&field);
+    // The largest contour at a few isovalues.
+    let (iso, seed) = (1..10)
+        .map(|k| Isovalue::new(lo + (hi - lo) * k as f64 / 10.0))
+        .flat_map(|iso| {
+            let (tree, field) = (&tree, &field);
+            (0..tree.arcs().len() as u32)
+                .filter_map(move |a| path_seed(tree, field, ArcId(a), iso).map(|s| (iso, s)))
+                .collect::<Vec<_>>()
+        })
+        .max_by_key(|(iso, s)| follower.follow(s, *iso).num_triangles())
+        .expect("a contour");
+    let want = ContourFollower::new(&field).follow(&seed, iso);
+    assert!(want.num_triangles() > 20_000, "a contour worth cancelling");
+    for limit in [0, 5_000, usize::MAX] {
+        let mut follower = ContourFollower::new(&field).with_serial_limit(limit);
+        // How many times an uncancelled extraction asks.
+        let asked = AtomicUsize::new(0);
+        let whole = follower
+            .extract(&seed, iso, &|| {
+                asked.fetch_add(1, Ordering::Relaxed);
+                false
+            })
+            .expect("not cancelled");
+        assert_same_contour(&whole, &want, &format!("limit {limit}"));
+        let asked = asked.into_inner();
+        assert!(asked >= 2, "limit {limit}: asked {asked} times");
+        for stop_at in [1, 2, asked / 2, asked] {
+            let calls = AtomicUsize::new(0);
+            let r = follower.extract(&seed, iso, &|| {
+                calls.fetch_add(1, Ordering::Relaxed) + 1 >= stop_at
+            });
+            assert_eq!(
+                r.map(|m| m.num_triangles()),
+                Err(flexiso::contour::follow::Cancelled),
+                "limit {limit}, cancelled at call {stop_at} of {asked}"
+            );
+            let again = follower
+                .extract(&seed, iso, &|| false)
+                .expect("not cancelled");
+            assert_same_contour(&again, &want, &format!("limit {limit}, after a cancel"));
+        }
+    }
+}

@@ -2,8 +2,9 @@
 //! llvmpipe on machines without a GPU). Without an adapter these tests print
 //! a note and pass, unless `FLEXISO_REQUIRE_GPU=1`, where they fail.
 
+use flexiso::render::geometry::{self, Corners};
 use flexiso::render::{
-    Camera, DEFAULT_BACKGROUND, HeadlessMesh, Renderer, icosphere, render_to_image,
+    Camera, DEFAULT_BACKGROUND, HeadlessMesh, PreparedMesh, Renderer, icosphere, render_to_image,
 };
 use glam::Vec3;
 
@@ -379,4 +380,200 @@ fn budgeted_upload_swaps_in_the_complete_mesh() {
         img.as_raw() == expected.as_raw(),
         "same picture as uploaded at once"
     );
+}
+
+// The compact vertex format: 12 bytes per vertex, 16-bit positions in the
+// mesh's box, octahedral normals; 16-bit index runs where corners allow.
+
+#[test]
+fn compact_vertices_round_trip_within_the_quantisation_error() {
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rnd = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let n = 5000;
+    let positions: Vec<[f32; 3]> = (0..n)
+        .map(|_| [180.0 * rnd() + 3.0, 217.0 * rnd() - 40.0, 0.5 * rnd()])
+        .collect();
+    let mut normals: Vec<[f32; 3]> = (0..n)
+        .map(|_| [2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0])
+        .collect();
+    // The octahedron's folds and corners.
+    normals[..8].copy_from_slice(&[
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+        [1.0, -1.0, -1.0],
+        [-1e-9, 1e-9, -1.0],
+    ]);
+    let indices: Vec<u32> = (0..n as u32 - 2).flat_map(|i| [i, i + 1, i + 2]).collect();
+    let m = flexiso::render::PreparedMesh::new(&positions, &normals, &indices).expect("valid");
+    assert_eq!(
+        m.gpu_bytes(),
+        12 * n as u64 + m.corners().bytes().len() as u64
+    );
+    let (lo, hi) = m.bounds().expect("a box");
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let err = (hi - lo) / 65535.0 * 0.5 + (hi.abs().max(lo.abs())) * 1e-6;
+    for i in 0..n {
+        let (p, nr) = m.vertex(i);
+        let d = (Vec3::from(p) - Vec3::from(positions[i])).abs();
+        assert!(
+            d.cmple(err).all(),
+            "vertex {i}: {p:?} vs {:?}",
+            positions[i]
+        );
+        let want = Vec3::from(normals[i]).as_dvec3().normalize();
+        let got = Vec3::from(nr).as_dvec3();
+        assert!((got.length() - 1.0).abs() < 1e-5);
+        // 16-bit octahedral: well under 0.01°.
+        let angle = got.cross(want).length().atan2(got.dot(want));
+        assert!(
+            angle < 0.01f64.to_radians(),
+            "normal {i}: {}°",
+            angle.to_degrees()
+        );
+    }
+    assert_eq!(
+        geometry::decode_normal(geometry::encode_normal([0.0; 3])),
+        [0.0, 0.0, 1.0]
+    );
+    assert_eq!(
+        geometry::decode_normal(geometry::encode_normal([f32::NAN; 3])),
+        [0.0, 0.0, 1.0]
+    );
+}
+
+#[test]
+fn a_flat_mesh_quantises_its_flat_axis_to_its_plane() {
+    let p = [[0.0, 0.0, 7.5], [1.0, 0.0, 7.5], [0.0, 2.0, 7.5]];
+    let m = flexiso::render::PreparedMesh::new(&p, &[], &[0, 1, 2]).expect("valid");
+    for (i, want) in p.iter().enumerate() {
+        assert_eq!(m.vertex(i).0, *want);
+    }
+}
+
+/// A `n × n` height field in row order: triangles row by row, so runs of
+/// rows stay within 65,536 vertices of their first.
+fn terrain(n: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let positions = (0..n * n)
+        .map(|i| {
+            let (x, y) = ((i % n) as f32 / n as f32, (i / n) as f32 / n as f32);
+            [x, y, 0.1 * (6.0 * x).sin() * (5.0 * y).cos()]
+        })
+        .collect();
+    let mut indices = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let v = x + n * y;
+            indices.extend([v, v + 1, v + n + 1, v, v + n + 1, v + n]);
+        }
+    }
+    (positions, indices)
+}
+
+#[test]
+fn nearby_corners_travel_as_16_bit_runs_and_scattered_ones_as_32_bit() {
+    let (p, i) = terrain(400);
+    let m = PreparedMesh::new(&p, &[], &i).expect("valid");
+    let Corners::Short { runs, .. } = m.corners() else {
+        panic!("row-ordered triangles fit 16-bit runs");
+    };
+    assert!(runs.len() > 2, "160,000 vertices need several runs");
+    for r in runs {
+        let span = i[r.start as usize..r.end as usize].iter();
+        assert!(
+            span.clone()
+                .all(|&v| v >= r.base && v - r.base <= u16::MAX as u32)
+        );
+    }
+    assert_eq!(m.corners().to_absolute(), i, "every corner as it was");
+    assert_eq!(m.gpu_bytes(), 12 * p.len() as u64 + 2 * i.len() as u64);
+    // Corners scattered over the whole mesh: 32-bit.
+    let n = p.len() as u32;
+    let scattered: Vec<u32> = i
+        .iter()
+        .map(|&v| v.wrapping_mul(2_654_435_761) % n)
+        .collect();
+    let m = PreparedMesh::new(&p, &[], &scattered).expect("valid");
+    assert!(matches!(m.corners(), Corners::Long(_)));
+    assert_eq!(m.corners().to_absolute(), scattered);
+    // An odd number of 16-bit corners is padded to whole 4-byte words.
+    let m = PreparedMesh::new(&p[..3], &[], &[0, 1, 2]).expect("valid");
+    assert_eq!(m.corners().bytes().len(), 8);
+    assert_eq!(m.corners().len(), 3);
+}
+
+/// A mesh drawn in 16-bit runs (one draw each, from its base vertex) is
+/// the same picture as the same mesh drawn with 32-bit indices.
+#[test]
+fn index_runs_draw_the_same_picture_as_32_bit_indices() {
+    let Some(gpu) = gpu() else { return };
+    let (p, i) = terrain(400);
+    // Reversed vertex numbering within each triangle's reach stays in
+    // runs; a permutation that scatters them forces 32-bit indices.
+    let n = p.len() as u32;
+    // A bijection: the multiplier is prime to n = 2^8 5^4.
+    let perm = |v: u32| (u64::from(v) * 2_654_435_761 % u64::from(n)) as u32;
+    let mut q = vec![[0f32; 3]; p.len()];
+    for (v, x) in p.iter().enumerate() {
+        q[perm(v as u32) as usize] = *x;
+    }
+    let j: Vec<u32> = i.iter().map(|&v| perm(v)).collect();
+    let mut camera = Camera::default();
+    camera.fit([0.0, 0.0, -0.1], [1.0, 1.0, 0.1]);
+    let picture = |p: &[[f32; 3]], i: &[u32], short: bool| {
+        let m = PreparedMesh::new(p, &[], i).expect("valid");
+        assert_eq!(matches!(m.corners(), Corners::Short { .. }), short);
+        let mut r = gpu.renderer();
+        r.set_prepared_mesh(&gpu.device, 1, std::sync::Arc::new(m))
+            .expect("queued");
+        r.upload_pending(&gpu.device, &gpu.queue, u64::MAX);
+        r.render(&gpu.device, &gpu.queue, &camera, 200, 150);
+        r.read_image(&gpu.device, &gpu.queue).expect("read")
+    };
+    let a = picture(&p, &i, true);
+    let b = picture(&q, &j, false);
+    save("terrain.png", &a);
+    let drawn = a.pixels().filter(|x| !is_background(x)).count();
+    assert!(drawn > 3000, "{drawn} pixels drawn");
+    assert!(a.as_raw() == b.as_raw(), "the same picture");
+}
+
+/// A drag replaces one large mesh again and again, each over several
+/// frames: the buffers of the mesh drawn before are reused for the next,
+/// and the picture is the same as an upload at once.
+#[test]
+fn repeated_budgeted_uploads_reuse_buffers_and_draw_the_last_mesh() {
+    let Some(gpu) = gpu() else { return };
+    let (a_p, a_n, a_i) = icosphere([0.4, 0.5, 0.5], 0.3, 5);
+    let (b_p, b_n, b_i) = icosphere([0.6, 0.5, 0.5], 0.25, 5);
+    let mut camera = Camera::default();
+    camera.fit([0.0; 3], [1.0; 3]);
+    let mut direct = gpu.renderer();
+    direct
+        .set_mesh(&gpu.device, &gpu.queue, 1, &a_p, &a_n, &a_i)
+        .expect("a");
+    direct.render(&gpu.device, &gpu.queue, &camera, 160, 120);
+    let expected = direct.read_image(&gpu.device, &gpu.queue).expect("read");
+    let mut r = gpu.renderer();
+    for (p, n, i) in [(&a_p, &a_n, &a_i), (&b_p, &b_n, &b_i), (&a_p, &a_n, &a_i)] {
+        let m = PreparedMesh::new(p, n, i).expect("valid");
+        r.set_prepared_mesh(&gpu.device, 1, std::sync::Arc::new(m))
+            .expect("queued");
+        let mut calls = 0;
+        while r.upload_pending(&gpu.device, &gpu.queue, 100_000) {
+            calls += 1;
+        }
+        assert!(calls > 1, "over several calls");
+    }
+    r.render(&gpu.device, &gpu.queue, &camera, 160, 120);
+    let img = r.read_image(&gpu.device, &gpu.queue).expect("read");
+    assert!(img.as_raw() == expected.as_raw(), "the last mesh, whole");
 }

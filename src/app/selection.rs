@@ -345,7 +345,10 @@ pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
         c.superarc,
         c.h,
         &mut FollowerScratch::default(),
-    );
+        None,
+        &|| false,
+    )
+    .unwrap_or(None);
     c.extract_ms = t.elapsed().as_secs_f64() * 1e3;
     c.topology = mesh
         .as_ref()

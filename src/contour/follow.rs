@@ -21,11 +21,24 @@
 //! keep the flood's spatial locality: neighbouring tetrahedra hit
 //! neighbouring memory, where a hash scatters them.
 //!
+//! **On every core.** The flood is one thread's walk: fine for the small
+//! contours most picks and drags touch, but a head or brain surface of an
+//! MRI holds millions of triangles. [`ContourFollower::extract`] floods
+//! for at most [`SERIAL_TRIANGLES`] triangles and then hands the contour
+//! to the parallel sweep (`super::sweep`, [`contour_by_sweep`]): every cube
+//! layer of the volume marched on all cores, the triangles' components by
+//! union-find, the seed's component kept. The same case tables, edge
+//! interpolation and vertex sharing make it the same mesh, vertices and
+//! triangles renumbered; [`ContourFollower::follow`], the flood alone,
+//! stays as the tests' oracle. Both stop when a cancel check says a newer
+//! request superseded them ([`Cancelled`]), returning nothing partial.
+//!
 //! **Normals** come from the field's gradient (central differences,
 //! interpolated along the crossed edge), falling back to the area-weighted
 //! triangle normal where the gradient vanishes or disagrees with the
 //! triangles' winding (see [`gradient_normals`]).
 
+use super::sweep::{SweepScratch, contour_by_sweep};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
@@ -178,6 +191,37 @@ struct TetRef {
     rec: u32,
 }
 
+/// Why an extraction stopped before its end: the caller's cancel check
+/// answered true (a newer request superseded it). Nothing of the partial
+/// contour is returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the contour extraction was cancelled")]
+pub struct Cancelled;
+
+/// The fewest triangles [`ContourFollower::extract`] lets the serial
+/// flood emit before it hands the contour to the parallel sweep.
+pub const SERIAL_TRIANGLES: usize = 60_000;
+
+/// How many triangles the serial flood should emit before the parallel
+/// sweep would have been faster, for a volume of `voxels` on `threads`
+/// cores. Measured on colin27_ch2 (`cargo bench --bench contour`, CPU
+/// time of all threads): following costs about 125 ns of CPU per
+/// triangle, the sweep about 40 ns per voxel plus 47 ns per triangle of
+/// the whole isosurface, spread over the cores. Taking the isosurface to
+/// be the contour (the sweep's best case), the two meet at
+/// `t = 40 V / (125 P - 47)`: a fifth of the voxels on 2 cores, a fiftieth
+/// on 16.
+pub fn serial_limit(voxels: usize, threads: usize) -> usize {
+    if threads < 2 {
+        return usize::MAX;
+    }
+    let t = 40.0 * voxels as f64 / (125.0 * threads as f64 - 47.0);
+    (t as usize).max(SERIAL_TRIANGLES)
+}
+
+/// Tetrahedra the flood visits between two cancel checks.
+const CHECK_EVERY: u32 = 1 << 14;
+
 /// Marks an edge without a contour vertex yet.
 const NO_VERTEX: u32 = u32::MAX;
 
@@ -220,6 +264,11 @@ pub struct ContourFollower<'f> {
     /// Per contour vertex of the last contour: its mesh edge (below,
     /// above) and where on it, for the gradient normals.
     vertex_edges: Vec<(u32, u32, f32)>,
+    /// The parallel sweep's tables (see [`ContourFollower::extract`]).
+    sweep: SweepScratch,
+    /// Triangles the serial flood of [`ContourFollower::extract`] may
+    /// emit; None: [`serial_limit`] of the field and the thread pool.
+    serial_limit: Option<usize>,
 }
 
 /// The record of vertex `v`, created if the flood has not touched `v` yet.
@@ -250,6 +299,7 @@ pub struct FollowerScratch {
     records: Vec<VertexRecord>,
     stack: Vec<TetRef>,
     vertex_edges: Vec<(u32, u32, f32)>,
+    sweep: SweepScratch,
 }
 
 impl<'f> ContourFollower<'f> {
@@ -263,11 +313,13 @@ impl<'f> ContourFollower<'f> {
             mut records,
             mut stack,
             mut vertex_edges,
+            sweep,
         } = scratch;
         records.clear();
         stack.clear();
         vertex_edges.clear();
         (f.slot, f.records, f.stack, f.vertex_edges) = (slot, records, stack, vertex_edges);
+        f.sweep = sweep;
         f
     }
 
@@ -278,6 +330,7 @@ impl<'f> ContourFollower<'f> {
             records: self.records,
             stack: self.stack,
             vertex_edges: self.vertex_edges,
+            sweep: self.sweep,
         }
     }
 
@@ -297,15 +350,103 @@ impl<'f> ContourFollower<'f> {
             records: Vec::new(),
             stack: Vec::new(),
             vertex_edges: Vec::new(),
+            sweep: SweepScratch::default(),
+            serial_limit: None,
         }
     }
 
-    /// The contour through `seed` at `iso`. An edge that `iso` does not
-    /// cross, or a 2D grid, gives an empty mesh.
+    /// Sets how many triangles the serial flood of
+    /// [`ContourFollower::extract`] may emit before the parallel sweep
+    /// takes over (default [`serial_limit`] of the field and the thread
+    /// pool; 0 sends every contour to the sweep, `usize::MAX` none: for
+    /// tests and benchmarks).
+    pub fn with_serial_limit(mut self, triangles: usize) -> Self {
+        self.serial_limit = Some(triangles);
+        self
+    }
+
+    /// The contour through `seed` at `iso`, followed on this thread: the
+    /// serial flood, the oracle [`ContourFollower::extract`] is tested
+    /// against. An edge that `iso` does not cross, or a 2D grid, gives an
+    /// empty mesh.
     pub fn follow(&mut self, seed: &PathSeed, iso: Isovalue) -> ContourMesh {
+        match self.follow_within(seed, iso, usize::MAX, &|| false) {
+            Ok(Some(mesh)) => mesh,
+            // Neither a limit nor a cancel check to stop it.
+            _ => ContourMesh::empty(seed.arc),
+        }
+    }
+
+    /// The contour through `seed` at `iso` on every core, the same mesh as
+    /// [`ContourFollower::follow`] gives (the same oriented triangles on
+    /// the same shared vertices; vertices and triangles possibly in
+    /// another order), or [`Cancelled`] soon after `cancel` answers true.
+    ///
+    /// A small contour is followed on this thread; one that grows past
+    /// [`SERIAL_TRIANGLES`] is handed to the parallel sweep, which marches
+    /// every cube layer of the volume on all cores, tells the components
+    /// apart by union-find and keeps only the seed's (see `super::sweep`).
+    /// So the cost is the flood's for small contours and, for large ones,
+    /// a pass over the volume plus the isosurface's triangles spread over
+    /// the cores. `cancel` is asked every few thousand tetrahedra of the
+    /// flood, between the sweep's phases and before each of its cube
+    /// layers; it must be cheap (an atomic load).
+    pub fn extract(
+        &mut self,
+        seed: &PathSeed,
+        iso: Isovalue,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<ContourMesh, Cancelled> {
+        self.extract_expecting(seed, iso, None, cancel)
+    }
+
+    /// [`ContourFollower::extract`] told how many triangles the contour
+    /// had a moment ago (the last drag step): one expected past the serial
+    /// limit goes straight to the sweep, without a flood given up on the
+    /// way. Only the path taken depends on `expected`, never the mesh.
+    pub fn extract_expecting(
+        &mut self,
+        seed: &PathSeed,
+        iso: Isovalue,
+        expected: Option<usize>,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<ContourMesh, Cancelled> {
+        if cancel() {
+            return Err(Cancelled);
+        }
+        let threads = rayon::current_num_threads();
+        let limit = match self.serial_limit {
+            _ if threads < 2 => usize::MAX,
+            Some(l) => l,
+            None => serial_limit(self.field.len(), threads),
+        };
+        if expected.is_none_or(|e| e <= limit)
+            && let Some(mesh) = self.follow_within(seed, iso, limit, cancel)?
+        {
+            return Ok(mesh);
+        }
+        self.reset();
+        match contour_by_sweep(self.field, seed, iso, &mut self.sweep, cancel)? {
+            Some(mesh) => Ok(mesh),
+            // Beyond the sweep's u32 ids: the flood has no such limit.
+            None => Ok(self
+                .follow_within(seed, iso, usize::MAX, cancel)?
+                .unwrap_or_else(|| ContourMesh::empty(seed.arc))),
+        }
+    }
+
+    /// The serial flood, given up (`Ok(None)`) once it has emitted more
+    /// than `limit` triangles, cancelled when `cancel` says so.
+    fn follow_within(
+        &mut self,
+        seed: &PathSeed,
+        iso: Isovalue,
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<ContourMesh>, Cancelled> {
         let mut out = ContourMesh::empty(seed.arc);
         if self.dims.iter().any(|&d| d < 2) {
-            return out;
+            return Ok(Some(out));
         }
         if self.slot.len() != self.field.len() {
             // Zeroed memory: the system hands out pages lazily. (A table of
@@ -316,7 +457,9 @@ impl<'f> ContourFollower<'f> {
         }
         let field = self.field;
         crate::with_values!(field.values(), v => {
-            self.flood(v.as_slice(), seed, iso, &mut out);
+            if !self.flood(v.as_slice(), seed, iso, &mut out, limit, cancel)? {
+                return Ok(None);
+            }
             out.normals = gradient_normals(
                 v.as_slice(),
                 self.dims,
@@ -326,7 +469,7 @@ impl<'f> ContourFollower<'f> {
                 &out.indices,
             );
         });
-        out
+        Ok(Some(out))
     }
 
     /// Forgets the last contour: O(1), but gives back memory when the last
@@ -374,17 +517,23 @@ impl<'f> ContourFollower<'f> {
         None
     }
 
+    /// Floods from the seed into `out`; false when more than `limit`
+    /// triangles came out (then `out` is partial).
     fn flood<T: Scalar>(
         &mut self,
         values: &[T],
         seed: &PathSeed,
         iso: Isovalue,
         out: &mut ContourMesh,
-    ) {
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, Cancelled> {
         self.reset();
         let Some(mut start) = self.tet_of_edge(seed.below, seed.above) else {
-            return;
+            return Ok(true);
         };
+        let index_limit = limit.saturating_mul(3);
+        let mut countdown = CHECK_EVERY;
         let tables = TetTables::get();
         let Self {
             slot,
@@ -403,6 +552,16 @@ impl<'f> ContourFollower<'f> {
         let sy = self.dims[0] as u32;
         let sz = sy * self.dims[1] as u32;
         while let Some(t) = stack.pop() {
+            countdown -= 1;
+            if countdown == 0 {
+                countdown = CHECK_EVERY;
+                if cancel() {
+                    return Err(Cancelled);
+                }
+                if out.indices.len() > index_limit {
+                    return Ok(false);
+                }
+            }
             let corners = CUBE_TETRAHEDRA[t.perm as usize];
             let ids = corners.map(|c| t.origin + corner_offset[c as usize]);
             let vals = ids.map(|v| values[v as usize].to_f64());
@@ -487,6 +646,7 @@ impl<'f> ContourFollower<'f> {
                 }
             }
         }
+        Ok(out.indices.len() <= index_limit)
     }
 }
 
@@ -578,11 +738,20 @@ pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
 }
 
 /// Unit vertex normals as area-weighted sums of the triangle normals (a
-/// vertex whose triangles all have zero area gets +z).
+/// vertex whose triangles all have zero area, or that no triangle uses,
+/// gets +z; triangles with a corner out of range or a non-finite normal
+/// are skipped). The one definition: the renderer's `compute_normals` is
+/// this function, and the sweep adds the same [`area_normal`]s.
 pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![[0f32; 3]; positions.len()];
     for tri in indices.chunks_exact(3) {
+        if tri.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
         let n = area_normal(positions, tri);
+        if !n.iter().all(|c| c.is_finite()) {
+            continue;
+        }
         for &i in tri {
             let s = &mut acc[i as usize];
             s[0] += n[0];

@@ -30,6 +30,18 @@
 //!    tree promises one component per spanning arc; if that ever failed,
 //!    the caller falls back to following, never to a wrong label.
 //!
+//! **One contour on every core** ([`contour_by_sweep`], what
+//! [`ContourFollower::extract`](super::ContourFollower::extract) uses for
+//! a large contour): steps 1 to 3 without positions or normals, then only
+//! the component of the seed's edge is kept. Its vertices get new ids in
+//! edge order (so each slab still owns a contiguous range of them), their
+//! positions and gradients are computed plane by plane for them alone,
+//! each slab compacts its own triangles in place, and the area-weighted
+//! normals are summed slab by slab as above. Cost: one pass over the
+//! volume's bytes plus every triangle at the isovalue, spread over the
+//! cores, plus the contour's own vertices; the tables are kept from call
+//! to call ([`SweepScratch`]).
+//!
 //! **Memory is time here:** the first touch of a fresh page costs about as
 //! much as the work done on it, so the largest contour (on a scan, nearly
 //! all of the isosurface) is compacted in place in the sweep's own arrays
@@ -38,7 +50,7 @@
 //! cube masks), 20 bytes per contour vertex (downhill gradient, root and
 //! label) and two dense tables of one plane per worker.
 
-use super::follow::{TetTables, area_normal, downhill, normalize, prefer_gradient};
+use super::follow::{Cancelled, TetTables, area_normal, downhill, normalize, prefer_gradient};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
@@ -212,7 +224,7 @@ fn sweep<T: Scalar>(
         .enumerate()
         .for_each(|(z, (((p, g), f), n))| {
             n.fill([0.0; 3]);
-            crossed_edges(values, field, &cubes, iso, z, p, g, f)
+            crossed_edges(values, field, &cubes, iso, z, |_| true, p, g, f)
         });
 
     // 2. Triangles, counted per cube layer, then written slab by slab.
@@ -253,8 +265,8 @@ fn sweep<T: Scalar>(
         .zip(split_lengths(&mut indices, slab_indices))
         .enumerate()
         .for_each(|(s, ((parent, normals), indices))| {
-            let written = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start);
-            debug_assert_eq!(written, indices.len(), "triangles as counted");
+            let written = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start, &|| false);
+            debug_assert_eq!(written, Some(indices.len()), "triangles as counted");
             // 3. Unions inside the slab: all but the last layer, whose
             // triangles reach the next slab's first plane.
             let inner = if s + 1 == slabs {
@@ -411,7 +423,25 @@ fn cube_masks(above: &[u8], dims: [usize; 3], z: usize, out: &mut [u8]) {
     let [nx, ny, nz] = dims;
     let plane = nx * ny;
     for y in 0..ny {
-        for x in 0..nx {
+        let row = nx * (y + ny * z);
+        // Inside the box (every corner exists): eight loads, no branch.
+        let inner = if y + 1 < ny && z + 1 < nz { nx - 1 } else { 0 };
+        if inner > 0 {
+            let corner =
+                |c: usize| &above[row + (c & 1) + nx * (c >> 1 & 1) + plane * (c >> 2)..][..inner];
+            let c: [&[u8]; 8] = std::array::from_fn(corner);
+            for (x, m) in out[nx * y..nx * y + inner].iter_mut().enumerate() {
+                *m = c[0][x]
+                    | c[1][x] << 1
+                    | c[2][x] << 2
+                    | c[3][x] << 3
+                    | c[4][x] << 4
+                    | c[5][x] << 5
+                    | c[6][x] << 6
+                    | c[7][x] << 7;
+            }
+        }
+        for x in inner..nx {
             let v = x + nx * (y + ny * z);
             let inside = [x + 1 < nx, y + 1 < ny, z + 1 < nz];
             let mut m = 0u8;
@@ -443,6 +473,7 @@ fn crossed_edges<T: Scalar>(
     cubes: &[u8],
     iso: Isovalue,
     z: usize,
+    mut keep: impl FnMut(usize) -> bool,
     positions: &mut [[f32; 3]],
     downhill_out: &mut [[f32; 3]],
     on_face: &mut [bool],
@@ -451,6 +482,7 @@ fn crossed_edges<T: Scalar>(
     let [nx, ny, _] = dims;
     let spacing = field.spacing();
     let mut i = 0;
+    let mut edge = 0;
     for y in 0..ny {
         for x in 0..nx {
             let v = x + nx * (y + ny * z);
@@ -459,6 +491,10 @@ fn crossed_edges<T: Scalar>(
             while todo != 0 {
                 let d = todo.trailing_zeros() as usize;
                 todo &= todo - 1;
+                edge += 1;
+                if !keep(edge - 1) {
+                    continue;
+                }
                 let step = [d & 1, d >> 1 & 1, d >> 2 & 1];
                 let (cv, cu) = ([x, y, z], [x + step[0], y + step[1], z + step[2]]);
                 let u = v + step[0] + nx * step[1] + nx * ny * step[2];
@@ -498,7 +534,8 @@ impl Sweep<'_> {
         layers: std::ops::Range<usize>,
         out: &mut [u32],
         layer_start: &[u32],
-    ) -> usize {
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Option<usize> {
         let [nx, ny, _] = self.dims;
         let plane = nx * ny;
         let tables = SweepTables::get();
@@ -508,6 +545,9 @@ impl Sweep<'_> {
         let offset = layer_start[layers.start] as usize;
         let mut w = 0;
         for z in layers {
+            if cancel() {
+                return None;
+            }
             debug_assert_eq!(w + offset, layer_start[z] as usize);
             std::mem::swap(&mut lower, &mut upper);
             self.fill_ids(&mut upper, z + 1);
@@ -534,7 +574,7 @@ impl Sweep<'_> {
                 }
             }
         }
-        w
+        Some(w)
     }
 
     /// Writes the id of every contour vertex owned by plane `z` into
@@ -566,6 +606,14 @@ fn add_triangle(
     first: u32,
     tri: &[u32],
 ) {
+    add_normal(normals, positions, first, tri);
+    union_triangle(parent, first, tri);
+}
+
+/// Adds the area-weighted normal of the triangle to its vertices'
+/// (`normals` holds the ids from `first` on).
+#[inline]
+fn add_normal(normals: &mut [[f32; 3]], positions: &[[f32; 3]], first: u32, tri: &[u32]) {
     let n = area_normal(positions, tri);
     for &i in tri {
         let s = &mut normals[(i - first) as usize];
@@ -573,6 +621,12 @@ fn add_triangle(
         s[1] += n[1];
         s[2] += n[2];
     }
+}
+
+/// Joins the triangle's vertices in the union-find over `parent` (which
+/// holds the ids from `first` on; the larger root goes under the smaller).
+#[inline]
+fn union_triangle(parent: &mut [u32], first: u32, tri: &[u32]) {
     let mut r0 = find(parent, first, tri[0]);
     for &i in &tri[1..] {
         let r = find(parent, first, i);
@@ -596,4 +650,301 @@ fn find(parent: &mut [u32], first: u32, mut x: u32) -> u32 {
         parent[(x - first) as usize] = g;
         x = g;
     }
+}
+
+/// Tables [`contour_by_sweep`] keeps from one call to the next: a fresh
+/// page costs as much as the work done on it, and a drag asks for the
+/// same sizes again and again. Two bytes per volume vertex (side of the
+/// cut, cube masks) and four per crossed edge (the union-find), sized by
+/// the largest call so far.
+#[derive(Default)]
+pub(crate) struct SweepScratch {
+    above: Vec<u8>,
+    cubes: Vec<u8>,
+    parent: Vec<u32>,
+}
+
+/// Marks a crossed edge whose vertex is not on the wanted contour.
+const DROPPED: u32 = u32::MAX;
+
+/// The single contour through `seed` at `iso` by the parallel sweep: the
+/// whole volume's crossed edges and triangles, their components by
+/// union-find, then only the seed's component kept, its positions,
+/// gradients and normals computed for its own vertices alone. The same
+/// triangles as following the seed (the same case tables, numbering and
+/// interpolation), its vertices in edge order, its triangles in sweep
+/// order. `Ok(None)` when the seed's edge is not crossed or the isosurface
+/// does not fit the sweep's `u32` ids (the caller then follows the seed);
+/// `Err` as soon as `cancel` answers true (checked between phases and
+/// before every cube layer of every slab).
+pub(crate) fn contour_by_sweep(
+    field: &ScalarField,
+    seed: &PathSeed,
+    iso: Isovalue,
+    scratch: &mut SweepScratch,
+    cancel: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<ContourMesh>, Cancelled> {
+    let dims = field.dims();
+    if dims.iter().any(|&d| d < 2) {
+        return Ok(None);
+    }
+    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, seed, iso, scratch, cancel))
+}
+
+fn sweep_one<T: Scalar>(
+    values: &[T],
+    field: &ScalarField,
+    seed: &PathSeed,
+    iso: Isovalue,
+    scratch: &mut SweepScratch,
+    cancel: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<ContourMesh>, Cancelled> {
+    let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
+    let dims = field.dims();
+    let [nx, ny, nz] = dims;
+    let plane = nx * ny;
+    let SweepScratch {
+        above,
+        cubes,
+        parent,
+    } = scratch;
+    above.resize(values.len(), 0);
+    above
+        .par_chunks_mut(1 << 16)
+        .zip(values.par_chunks(1 << 16))
+        .enumerate()
+        .for_each(|(c, (a, f))| {
+            let first = (c << 16) as u32;
+            for (k, (a, f)) in a.iter_mut().zip(f).enumerate() {
+                *a = iso.above_value(f.to_f64(), first + k as u32) as u8;
+            }
+        });
+    cubes.resize(values.len(), 0);
+    cubes
+        .par_chunks_mut(plane)
+        .enumerate()
+        .for_each(|(z, c)| cube_masks(above, dims, z, c));
+    check()?;
+
+    // 1. Crossed edges numbered by rows (see the module doc).
+    let row_counts: Vec<usize> = cubes
+        .par_chunks(nx)
+        .map(|row| row.iter().map(|&m| crossed(m).count_ones() as usize).sum())
+        .collect();
+    let Some(row_base) = prefix_sums(row_counts.into_iter(), u32::MAX as usize / 4) else {
+        return Ok(None);
+    };
+    let n = row_base[row_base.len() - 1] as usize;
+    let ctx = Sweep {
+        dims,
+        cubes,
+        row_base: &row_base,
+    };
+    let Some(seed_id) = edge_id(
+        field,
+        &ctx,
+        seed.below.min(seed.above),
+        seed.below.max(seed.above),
+    ) else {
+        return Ok(None);
+    };
+    let vertex_start = |z: usize| row_base[z * ny] as usize;
+    let plane_lengths: Vec<usize> = (0..nz)
+        .map(|z| vertex_start(z + 1) - vertex_start(z))
+        .collect();
+
+    // 2. Every triangle at `iso`, slab by slab, with 3. the unions inside
+    // each slab.
+    let tables = SweepTables::get();
+    let layer_triangles: Vec<usize> = (0..nz - 1)
+        .into_par_iter()
+        .map(|z| {
+            (0..ny - 1)
+                .map(|y| {
+                    cubes[nx * (y + ny * z)..][..nx - 1]
+                        .iter()
+                        .map(|&c| tables.triangles[c as usize] as usize)
+                        .sum::<usize>()
+                })
+                .sum()
+        })
+        .collect();
+    let Some(layer_start) = prefix_sums(layer_triangles.iter().map(|t| 3 * t), u32::MAX as usize)
+    else {
+        return Ok(None);
+    };
+    let mut indices = vec![0u32; layer_start[nz - 1] as usize];
+    let layers = nz - 1;
+    let slabs = layers.min(4 * rayon::current_num_threads()).max(1);
+    let cut: Vec<usize> = (0..=slabs).map(|s| s * layers / slabs).collect();
+    let end_plane = |s: usize| if s + 1 == slabs { nz } else { cut[s + 1] };
+    // Where a slab's last layer starts in its own triangles: that layer
+    // reaches the next slab's first plane.
+    let inner_len = |s: usize| {
+        if s + 1 == slabs {
+            (layer_start[cut[s + 1]] - layer_start[cut[s]]) as usize
+        } else {
+            (layer_start[cut[s + 1] - 1] - layer_start[cut[s]]) as usize
+        }
+    };
+    let slab_vertices = (0..slabs).map(|s| vertex_start(end_plane(s)) - vertex_start(cut[s]));
+    let slab_indices: Vec<usize> = (0..slabs)
+        .map(|s| (layer_start[cut[s + 1]] - layer_start[cut[s]]) as usize)
+        .collect();
+    parent.resize(n, 0);
+    parent
+        .par_chunks_mut(1 << 16)
+        .enumerate()
+        .for_each(|(c, p)| {
+            for (k, p) in p.iter_mut().enumerate() {
+                *p = ((c << 16) + k) as u32;
+            }
+        });
+    let marched: Vec<bool> = split_lengths(&mut parent[..], slab_vertices)
+        .into_par_iter()
+        .zip(split_lengths(&mut indices, slab_indices.iter().copied()))
+        .enumerate()
+        .map(|(s, (parent, indices))| {
+            let Some(written) = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start, cancel)
+            else {
+                return false;
+            };
+            debug_assert_eq!(written, indices.len(), "triangles as counted");
+            let first = vertex_start(cut[s]) as u32;
+            for tri in indices[..inner_len(s)].chunks_exact(3) {
+                union_triangle(parent, first, tri);
+            }
+            true
+        })
+        .collect();
+    if marched.contains(&false) {
+        return Err(Cancelled);
+    }
+    for s in 0..slabs - 1 {
+        let last = cut[s + 1] - 1;
+        let range = layer_start[last] as usize..layer_start[last + 1] as usize;
+        for tri in indices[range].chunks_exact(3) {
+            union_triangle(parent, 0, tri);
+        }
+    }
+    check()?;
+
+    // The seed's component: parents point down, so one ascending pass
+    // leaves every vertex pointing at its root.
+    for i in 0..n {
+        parent[i] = parent[parent[i] as usize];
+    }
+    let root = parent[seed_id as usize];
+    let kept_per_plane: Vec<usize> = split_lengths(&mut parent[..], plane_lengths.iter().copied())
+        .into_par_iter()
+        .map(|p| p.iter().filter(|&&r| r == root).count())
+        .collect();
+    // New vertex ids by plane (each plane's first): monotone in the old.
+    let Some(new_base) = prefix_sums(kept_per_plane.iter().copied(), u32::MAX as usize) else {
+        return Ok(None);
+    };
+    let kept = new_base[nz] as usize;
+    check()?;
+
+    // Positions, gradients and face flags of the kept vertices only; the
+    // union-find becomes the map from old ids to new (or DROPPED).
+    let mut positions = vec![[0f32; 3]; kept];
+    let mut downhill = vec![[0f32; 3]; kept];
+    let mut on_face = vec![false; kept];
+    let kept_lengths = || kept_per_plane.iter().copied();
+    split_lengths(&mut parent[..], plane_lengths.iter().copied())
+        .into_par_iter()
+        .zip(split_lengths(&mut positions, kept_lengths()))
+        .zip(split_lengths(&mut downhill, kept_lengths()))
+        .zip(split_lengths(&mut on_face, kept_lengths()))
+        .enumerate()
+        .for_each(|(z, (((map, p), g), f))| {
+            let mut next = new_base[z];
+            for m in map.iter_mut() {
+                *m = if *m == root {
+                    next += 1;
+                    next - 1
+                } else {
+                    DROPPED
+                };
+            }
+            crossed_edges(values, field, cubes, iso, z, |i| map[i] != DROPPED, p, g, f);
+        });
+    let map: &[u32] = parent;
+    check()?;
+
+    // The kept triangles, renumbered: each slab compacts its own in place
+    // (inner layers, then the last), then the slabs close up.
+    let compacted: Vec<(usize, usize)> = split_lengths(&mut indices, slab_indices.iter().copied())
+        .into_par_iter()
+        .enumerate()
+        .map(|(s, tris)| {
+            let inner = inner_len(s);
+            let mut w = 0;
+            let mut inner_kept = 0;
+            for r in (0..tris.len()).step_by(3) {
+                if r == inner {
+                    inner_kept = w;
+                }
+                if map[tris[r] as usize] != DROPPED {
+                    for k in 0..3 {
+                        tris[w + k] = map[tris[r + k] as usize];
+                    }
+                    w += 3;
+                }
+            }
+            if inner == tris.len() {
+                inner_kept = w;
+            }
+            (inner_kept, w)
+        })
+        .collect();
+    // (start, inner end, end) of each slab's kept triangles.
+    let mut spans = Vec::with_capacity(slabs);
+    let mut w = 0;
+    let mut r = 0;
+    for (s, &(inner, total)) in compacted.iter().enumerate() {
+        indices.copy_within(r..r + total, w);
+        spans.push((w, w + inner, w + total));
+        w += total;
+        r += slab_indices[s];
+    }
+    indices.truncate(w);
+    check()?;
+
+    // Area-weighted normals: a slab's inner layers touch its own vertices
+    // only (in parallel), its last layer the next slab's too (after).
+    let mut normals = vec![[0f32; 3]; kept];
+    let slab_kept = (0..slabs).map(|s| (new_base[end_plane(s)] - new_base[cut[s]]) as usize);
+    split_lengths(&mut normals, slab_kept)
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(s, normals)| {
+            let first = new_base[cut[s]];
+            let (start, inner, _) = spans[s];
+            for tri in indices[start..inner].chunks_exact(3) {
+                add_normal(normals, &positions, first, tri);
+            }
+        });
+    for &(_, inner, end) in &spans {
+        for tri in indices[inner..end].chunks_exact(3) {
+            add_normal(&mut normals, &positions, 0, tri);
+        }
+    }
+    normals
+        .par_chunks_mut(1 << 14)
+        .zip(downhill.par_chunks(1 << 14))
+        .for_each(|(normals, downhill)| {
+            normalize(normals);
+            for (n, g) in normals.iter_mut().zip(downhill) {
+                prefer_gradient(n, (*g != [0.0; 3]).then_some(*g));
+            }
+        });
+    Ok(Some(ContourMesh {
+        arc: seed.arc,
+        positions,
+        normals,
+        indices,
+        touches_boundary: on_face.par_iter().any(|&f| f),
+    }))
 }

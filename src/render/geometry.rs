@@ -4,10 +4,11 @@
 //! Picking casts the ray on the CPU against every triangle of each mesh
 //! whose bounding box the ray enters, nearest box first, stopping once a
 //! box starts beyond the nearest hit. This needs no GPU round trip, is exact
-//! and handles transparent meshes; it reads the [`PreparedMesh`] the vertex
-//! buffer was filled from (24 bytes per vertex, 12 per triangle, the same
-//! as the GPU's copy) and costs about 5 ns per triangle tested (rayon
-//! splits meshes above [`PARALLEL_TRIANGLES`]).
+//! (on the positions as drawn) and handles transparent meshes; it reads the
+//! [`PreparedMesh`] the vertex buffer was filled from (12 bytes per vertex,
+//! [`GpuVertex`], and 12 per triangle, the same as the GPU's copy) and
+//! costs about 5 ns per triangle tested (rayon splits meshes above
+//! [`PARALLEL_TRIANGLES`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -15,21 +16,253 @@ use rayon::prelude::*;
 /// Meshes with more triangles than this are ray-tested in parallel.
 pub const PARALLEL_TRIANGLES: usize = 200_000;
 
+/// One vertex as the GPU's vertex buffer holds it: 12 bytes instead of
+/// the 24 of two `f32` triples, so a contour of millions of triangles
+/// costs the UI thread half the copy.
+///
+/// * **Position:** each coordinate quantised to 16 bits across the mesh's
+///   own bounding box (`Unorm16x4`, the fourth unused): the error is at
+///   most half a step, `extent / 65535 / 2` per axis (a 200 mm head: 1.5
+///   µm, a thousandth of a voxel), far below a pixel at any zoom the
+///   explorer offers. The shader maps it back with the box
+///   ([`PreparedMesh::dequantise`], the same affine map).
+/// * **Normal:** octahedral encoding (Cigolle et al., "A survey of
+///   efficient representations for independent unit vectors", JCGT 2014)
+///   in two `Snorm16`: the unit sphere unfolded onto a square, at most
+///   about 0.005° off.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVertex {
+    /// Quantised position in the mesh's box, 0..=65535 per axis; the
+    /// fourth is 0.
+    pub position: [u16; 4],
+    /// Octahedral unit normal, -32767..=32767 per component.
+    pub normal: [i16; 2],
+}
+
+/// Largest quantised coordinate.
+const Q: f32 = 65535.0;
+
+/// Consecutive triangles whose corners lie within 65,536 vertices of
+/// `base`: drawn with 16-bit indices relative to it (`base_vertex` of an
+/// indexed draw).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IndexRun {
+    /// First index (three per triangle) of the run.
+    pub start: u32,
+    /// One past its last index.
+    pub end: u32,
+    /// The vertex its indices count from.
+    pub base: u32,
+}
+
+/// Triangle corners as the index buffer holds them.
+///
+/// A contour's triangles come in an order that keeps their corners close
+/// in vertex numbering (the sweep's layer order; the flood's depth-first
+/// order with vertices numbered as found), so runs of thousands of
+/// triangles reach fewer than 65,536 vertices: 6 bytes per triangle
+/// instead of 12, in a few dozen draws. Other meshes keep 32-bit indices.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Corners {
+    /// 16-bit indices relative to their run's base vertex; padded with a
+    /// zero to an even count (buffer copies go in 4-byte steps).
+    Short {
+        /// The indices, `runs` laid end to end (plus the pad).
+        indices: Vec<u16>,
+        /// The runs, ascending, covering every index.
+        runs: Vec<IndexRun>,
+    },
+    /// Absolute 32-bit indices.
+    Long(Vec<u32>),
+}
+
+impl Corners {
+    /// Triangle corners in 16-bit runs when runs average at least
+    /// [`MIN_RUN_TRIANGLES`] triangles, else 32-bit. Parallel.
+    fn new(indices: &[u32]) -> Corners {
+        // Runs never cross a chunk (so chunks are independent).
+        const CHUNK: usize = 3 << 16;
+        let greedy = |c: usize, tris: &[u32]| -> Vec<IndexRun> {
+            let offset = (c * CHUNK) as u32;
+            let mut runs = Vec::new();
+            let (mut start, mut lo, mut hi) = (0usize, u32::MAX, 0u32);
+            for (t, tri) in tris.chunks_exact(3).enumerate() {
+                let tlo = tri[0].min(tri[1]).min(tri[2]);
+                let thi = tri[0].max(tri[1]).max(tri[2]);
+                let (nlo, nhi) = (lo.min(tlo), hi.max(thi));
+                if nhi - nlo > u16::MAX as u32 {
+                    runs.push(IndexRun {
+                        start: offset + start as u32,
+                        end: offset + 3 * t as u32,
+                        base: lo,
+                    });
+                    (start, lo, hi) = (3 * t, tlo, thi);
+                } else {
+                    (lo, hi) = (nlo, nhi);
+                }
+            }
+            if start < tris.len() {
+                runs.push(IndexRun {
+                    start: offset + start as u32,
+                    end: offset + tris.len() as u32,
+                    base: lo,
+                });
+            }
+            runs
+        };
+        let runs: Vec<IndexRun> = if indices.len() > CHUNK {
+            indices
+                .par_chunks(CHUNK)
+                .enumerate()
+                .flat_map_iter(|(c, t)| greedy(c, t))
+                .collect()
+        } else {
+            greedy(0, indices)
+        };
+        let triangles = indices.len() / 3;
+        if runs.len() > 1 && runs.len() * MIN_RUN_TRIANGLES > triangles {
+            return Corners::Long(indices.to_vec());
+        }
+        let mut short = vec![0u16; indices.len() + indices.len() % 2];
+        let write = |out: &mut [u16], from: usize| {
+            // The runs within this stretch of indices.
+            let first = runs.partition_point(|r| (r.end as usize) <= from);
+            for r in &runs[first..] {
+                let (s, e) = (r.start as usize, r.end as usize);
+                if s >= from + out.len() {
+                    break;
+                }
+                let (s, e) = (s.max(from), e.min(from + out.len()));
+                for (o, &i) in out[s - from..e - from].iter_mut().zip(&indices[s..e]) {
+                    *o = (i - r.base) as u16;
+                }
+            }
+        };
+        if indices.len() > CHUNK {
+            short[..indices.len()]
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, out)| write(out, c * CHUNK));
+        } else {
+            write(&mut short[..indices.len()], 0);
+        }
+        Corners::Short {
+            indices: short,
+            runs,
+        }
+    }
+
+    /// Number of triangle corners (three per triangle).
+    pub fn len(&self) -> usize {
+        match self {
+            Corners::Short { runs, .. } => runs.last().map_or(0, |r| r.end as usize),
+            Corners::Long(i) => i.len(),
+        }
+    }
+
+    /// True when there is no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The bytes of the index buffer.
+    pub fn bytes(&self) -> &[u8] {
+        match self {
+            Corners::Short { indices, .. } => bytemuck::cast_slice(indices),
+            Corners::Long(i) => bytemuck::cast_slice(i),
+        }
+    }
+
+    /// Every triangle's corners as absolute vertex indices, in order.
+    pub fn to_absolute(&self) -> Vec<u32> {
+        match self {
+            Corners::Short { indices, runs } => runs
+                .iter()
+                .flat_map(|r| {
+                    indices[r.start as usize..r.end as usize]
+                        .iter()
+                        .map(move |&i| r.base + i as u32)
+                })
+                .collect(),
+            Corners::Long(i) => i.clone(),
+        }
+    }
+
+    /// The corner ranges and the base vertex each counts from.
+    fn runs(&self) -> Vec<(std::ops::Range<usize>, u32)> {
+        match self {
+            Corners::Short { runs, .. } => runs
+                .iter()
+                .map(|r| (r.start as usize..r.end as usize, r.base))
+                .collect(),
+            Corners::Long(i) => vec![(0..i.len(), 0)],
+        }
+    }
+
+    /// Corner `k` (an index into the corners) as an absolute vertex index,
+    /// within a run of base `base`.
+    #[inline]
+    fn corner(&self, k: usize, base: u32) -> u32 {
+        match self {
+            Corners::Short { indices, .. } => base + indices[k] as u32,
+            Corners::Long(i) => i[k],
+        }
+    }
+}
+
+/// Fewest triangles per 16-bit run on average for [`Corners::Short`].
+pub const MIN_RUN_TRIANGLES: usize = 1024;
+
+/// `n` (any length) in the octahedral encoding of [`GpuVertex::normal`];
+/// a zero or non-finite vector becomes +z.
+pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
+    let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+    if !(l1 > 0.0 && l1.is_finite()) {
+        return [0, 0];
+    }
+    let (mut x, mut y) = (n[0] / l1, n[1] / l1);
+    if n[2] < 0.0 {
+        let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
+        (x, y) = ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y));
+    }
+    [x, y].map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16)
+}
+
+/// The unit vector of an octahedral [`GpuVertex::normal`] (what the vertex
+/// shader computes).
+pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
+    let (x, y) = (
+        (e[0] as f32 / 32767.0).max(-1.0),
+        (e[1] as f32 / 32767.0).max(-1.0),
+    );
+    let z = 1.0 - x.abs() - y.abs();
+    let t = (-z).max(0.0);
+    let n = Vec3::new(
+        x + if x >= 0.0 { -t } else { t },
+        y + if y >= 0.0 { -t } else { t },
+        z,
+    );
+    n.normalize_or(Vec3::Z).to_array()
+}
+
 /// A mesh made ready for the GPU: validated, normals computed when it came
-/// without, positions and normals interleaved as the vertex buffer holds
-/// them, with its box. Building one costs a few passes over the mesh, so
-/// the app builds it on the thread that extracted the contour and the UI
-/// thread only copies bytes ([`Renderer::set_prepared_mesh`]). The renderer
-/// keeps it (shared) as its CPU copy for picking.
+/// without, vertices quantised as the vertex buffer holds them
+/// ([`GpuVertex`]), with its box. Building one costs a few passes over the
+/// mesh (in parallel), so the app builds it on the thread that extracted
+/// the contour and the UI thread only copies bytes
+/// ([`Renderer::set_prepared_mesh`]). The renderer keeps it (shared) as
+/// its CPU copy for picking, which reads the dequantised positions.
 ///
 /// [`Renderer::set_prepared_mesh`]: super::Renderer::set_prepared_mesh
 #[derive(Clone, Debug)]
 pub struct PreparedMesh {
-    /// Position then normal of each vertex.
-    pub(crate) vertices: Vec<[f32; 6]>,
+    /// The vertices, quantised in `bbox`.
+    pub(crate) vertices: Vec<GpuVertex>,
     /// Triangle corners, three per triangle, each `< vertices.len()`.
-    pub(crate) indices: Vec<u32>,
-    /// Axis-aligned bounding box (min, max); inverted (min > max) when empty.
+    pub(crate) indices: Corners,
+    /// Axis-aligned bounding box (min, max) of the vertices as given;
+    /// inverted (min > max) when empty.
     pub(crate) bbox: (Vec3, Vec3),
     /// Whether counter-clockwise triangles face outwards: the signed volume
     /// enclosed is positive. Exact for closed meshes, a majority vote for
@@ -41,18 +274,21 @@ impl Default for PreparedMesh {
     fn default() -> Self {
         PreparedMesh {
             vertices: Vec::new(),
-            indices: Vec::new(),
+            indices: Corners::Long(Vec::new()),
             bbox: bbox_of(&[], &[]),
             ccw_outward: true,
         }
     }
 }
 
+/// Meshes with fewer vertices than this are prepared on one thread.
+const PARALLEL_VERTICES: usize = 1 << 15;
+
 impl PreparedMesh {
-    /// Checks and interleaves a mesh. `normals` has one normal per
-    /// position, or is empty to have them computed from the triangles
+    /// Checks and quantises a mesh. `normals` has one normal per position,
+    /// or is empty to have them computed from the triangles
     /// ([`compute_normals`]); `indices` holds three corners per triangle.
-    /// The error says what is malformed.
+    /// The error says what is malformed. Parallel (rayon) for large meshes.
     pub fn new(
         positions: &[[f32; 3]],
         normals: &[[f32; 3]],
@@ -71,7 +307,13 @@ impl PreparedMesh {
                 indices.len()
             ));
         }
-        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+        let n = positions.len();
+        let bad = if indices.len() > 4 * PARALLEL_VERTICES {
+            indices.par_iter().find_any(|&&i| i as usize >= n).copied()
+        } else {
+            indices.iter().find(|&&i| i as usize >= n).copied()
+        };
+        if let Some(bad) = bad {
             return Err(format!(
                 "index {bad} is out of range for {} positions",
                 positions.len()
@@ -90,17 +332,34 @@ impl PreparedMesh {
         } else {
             normals
         };
-        let vertices = positions
-            .iter()
-            .zip(normals)
-            .map(|(p, n)| [p[0], p[1], p[2], n[0], n[1], n[2]])
-            .collect();
         let bbox = bbox_of(positions, indices);
+        let (origin, step) = quantisation(bbox);
+        let quantise = |(p, nr): (&[f32; 3], &[f32; 3])| {
+            let q = ((Vec3::from(*p) - origin) * step).clamp(Vec3::ZERO, Vec3::splat(Q));
+            let q = if q.is_finite() { q } else { Vec3::ZERO };
+            GpuVertex {
+                position: [
+                    q.x.round() as u16,
+                    q.y.round() as u16,
+                    q.z.round() as u16,
+                    0,
+                ],
+                normal: encode_normal(*nr),
+            }
+        };
+        let parallel = n > PARALLEL_VERTICES;
+        let vertices = if parallel {
+            positions.par_iter().zip(normals).map(quantise).collect()
+        } else {
+            positions.iter().zip(normals).map(quantise).collect()
+        };
+        let volume = signed_volume(positions, indices, bbox);
+        let indices = Corners::new(indices);
         Ok(PreparedMesh {
             vertices,
-            indices: indices.to_vec(),
+            indices,
             bbox,
-            ccw_outward: signed_volume(positions, indices, bbox) >= 0.0,
+            ccw_outward: volume >= 0.0,
         })
     }
 
@@ -109,15 +368,57 @@ impl PreparedMesh {
         self.indices.len() / 3
     }
 
-    /// Bytes the GPU buffers take (vertices and indices).
-    pub fn gpu_bytes(&self) -> u64 {
-        (std::mem::size_of_val(&self.vertices[..]) + std::mem::size_of_val(&self.indices[..]))
-            as u64
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.vertices.len()
     }
 
-    fn position(&self, i: u32) -> Vec3 {
-        let v = &self.vertices[i as usize];
-        Vec3::new(v[0], v[1], v[2])
+    /// The bounding box `(min, max)` the positions are quantised in, or
+    /// None for a mesh without triangles.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let (lo, hi) = self.bbox;
+        lo.cmple(hi).all().then(|| (lo.to_array(), hi.to_array()))
+    }
+
+    /// Bytes the GPU buffers take (vertices and indices).
+    pub fn gpu_bytes(&self) -> u64 {
+        (std::mem::size_of_val(&self.vertices[..]) + self.indices.bytes().len()) as u64
+    }
+
+    /// The triangle corners as the index buffer holds them.
+    pub fn corners(&self) -> &Corners {
+        &self.indices
+    }
+
+    /// The quantised vertices as the vertex buffer holds them.
+    pub fn gpu_vertices(&self) -> &[GpuVertex] {
+        &self.vertices
+    }
+
+    /// The affine map from quantised to world positions: `world = origin +
+    /// q * scale` per axis (what the vertex shader applies, with `q` in
+    /// 0..=65535).
+    pub fn dequantise(&self) -> (Vec3, Vec3) {
+        let (origin, step) = quantisation(self.bbox);
+        let scale = Vec3::select(step.cmpgt(Vec3::ZERO), step.recip(), Vec3::ZERO);
+        (origin, scale)
+    }
+
+    /// Vertex `i`'s position and unit normal as the GPU sees them.
+    pub fn vertex(&self, i: usize) -> ([f32; 3], [f32; 3]) {
+        let (origin, scale) = self.dequantise();
+        let v = &self.vertices[i];
+        let q = Vec3::new(
+            v.position[0] as f32,
+            v.position[1] as f32,
+            v.position[2] as f32,
+        );
+        ((origin + q * scale).to_array(), decode_normal(v.normal))
+    }
+
+    fn position(&self, i: u32, origin: Vec3, scale: Vec3) -> Vec3 {
+        let v = &self.vertices[i as usize].position;
+        origin + Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32) * scale
     }
 
     /// Centre of the bounding box (for back-to-front sorting).
@@ -129,26 +430,44 @@ impl PreparedMesh {
         }
     }
 
-    /// The nearest hit of the ray `origin + t dir` (t > 0) with the mesh:
-    /// `(t, point)`.
+    /// The nearest hit of the ray `origin + t dir` (t > 0) with the mesh
+    /// (its positions as drawn): `(t, point)`.
     pub fn ray_hit(&self, origin: Vec3, dir: Vec3) -> Option<(f32, Vec3)> {
-        let test = |tri: &[u32]| -> Option<f32> {
-            let p = |k: usize| self.position(tri[k]);
-            ray_triangle(origin, dir, p(0), p(1), p(2))
-        };
-        let best = if self.indices.len() / 3 > PARALLEL_TRIANGLES {
-            self.indices
-                .par_chunks_exact(3)
-                .filter_map(test)
-                .reduce_with(f32::min)
-        } else {
-            self.indices
-                .chunks_exact(3)
-                .filter_map(test)
-                .reduce(f32::min)
-        };
+        let (o, scale) = self.dequantise();
+        let corners = &self.indices;
+        let parallel = corners.len() / 3 > PARALLEL_TRIANGLES;
+        let best = corners
+            .runs()
+            .into_iter()
+            .filter_map(|(range, base)| {
+                let test = |t: usize| -> Option<f32> {
+                    let p = |k: usize| self.position(corners.corner(3 * t + k, base), o, scale);
+                    ray_triangle(origin, dir, p(0), p(1), p(2))
+                };
+                let triangles = range.start / 3..range.end / 3;
+                if parallel {
+                    triangles
+                        .into_par_iter()
+                        .filter_map(test)
+                        .reduce_with(f32::min)
+                } else {
+                    triangles.filter_map(test).reduce(f32::min)
+                }
+            })
+            .reduce(f32::min);
         best.map(|t| (t, origin + t * dir))
     }
+}
+
+/// The box's corner and the steps per unit of each axis that map it onto
+/// 0..=65535 (0 along an axis of no extent, or with no box).
+fn quantisation((lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
+    if !lo.cmple(hi).all() {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    let extent = hi - lo;
+    let step = Vec3::select(extent.cmpgt(Vec3::ZERO), Q / extent, Vec3::ZERO);
+    (lo, Vec3::select(step.is_finite_mask(), step, Vec3::ZERO))
 }
 
 /// Six times the signed volume enclosed by the triangles (divergence
@@ -159,32 +478,41 @@ fn signed_volume(positions: &[[f32; 3]], indices: &[u32], bbox: (Vec3, Vec3)) ->
     } else {
         Vec3::ZERO
     };
-    indices
-        .chunks_exact(3)
-        .map(|t| {
-            let p = |k: usize| (Vec3::from(positions[t[k] as usize]) - o).as_dvec3();
-            p(0).dot(p(1).cross(p(2)))
-        })
-        .filter(|v| v.is_finite())
-        .sum()
+    let term = |t: &[u32]| {
+        let p = |k: usize| (Vec3::from(positions[t[k] as usize]) - o).as_dvec3();
+        let v = p(0).dot(p(1).cross(p(2)));
+        if v.is_finite() { v } else { 0.0 }
+    };
+    if indices.len() > 12 * PARALLEL_VERTICES {
+        indices.par_chunks_exact(3).map(term).sum()
+    } else {
+        indices.chunks_exact(3).map(term).sum()
+    }
 }
 
-/// The bounding box of the vertices used by the triangles (inverted when
-/// there are none).
+/// The bounding box of the finite vertices (inverted when there are no
+/// triangles).
 fn bbox_of(positions: &[[f32; 3]], indices: &[u32]) -> (Vec3, Vec3) {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    let empty = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     if indices.is_empty() {
-        return (lo, hi);
+        return empty;
     }
-    for p in positions {
+    let add = |(lo, hi): (Vec3, Vec3), p: &[f32; 3]| {
         let p = Vec3::from(*p);
         if p.is_finite() {
-            lo = lo.min(p);
-            hi = hi.max(p);
+            (lo.min(p), hi.max(p))
+        } else {
+            (lo, hi)
         }
+    };
+    if positions.len() > PARALLEL_VERTICES {
+        positions
+            .par_chunks(1 << 14)
+            .map(|c| c.iter().fold(empty, add))
+            .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1)))
+    } else {
+        positions.iter().fold(empty, add)
     }
-    (lo, hi)
 }
 
 /// Where the ray enters the box: the smallest `t ≥ 0` inside it, or None
@@ -231,33 +559,12 @@ pub(crate) fn ray_triangle(origin: Vec3, dir: Vec3, a: Vec3, b: Vec3, c: Vec3) -
     (t > 0.0).then_some(t)
 }
 
-/// Area-weighted vertex normals (unit length; zero for unused vertices), for
-/// meshes that come without normals. The orientation follows the winding:
-/// counter-clockwise triangles face their normal.
-pub fn compute_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
-    let mut acc = vec![Vec3::ZERO; positions.len()];
-    for tri in indices.chunks_exact(3) {
-        let [i, j, k] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-        if i >= positions.len() || j >= positions.len() || k >= positions.len() {
-            continue;
-        }
-        let (a, b, c) = (
-            Vec3::from(positions[i]),
-            Vec3::from(positions[j]),
-            Vec3::from(positions[k]),
-        );
-        // The cross product's length is twice the area: area weighting.
-        let n = (b - a).cross(c - a);
-        if n.is_finite() {
-            acc[i] += n;
-            acc[j] += n;
-            acc[k] += n;
-        }
-    }
-    acc.into_iter()
-        .map(|n| n.normalize_or_zero().to_array())
-        .collect()
-}
+/// Area-weighted unit vertex normals, for meshes that come without: the
+/// same function contour extraction starts its normals from (one
+/// definition, [`crate::contour::follow::vertex_normals`]). The
+/// orientation follows the winding: counter-clockwise triangles face
+/// their normal; a vertex no triangle of non-zero area uses gets +z.
+pub use crate::contour::follow::vertex_normals as compute_normals;
 
 /// A sphere mesh (icosahedron subdivided `subdivisions` times, vertices
 /// pushed to the sphere): `(positions, normals, indices)`, outward normals

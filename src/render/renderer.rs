@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
-use super::geometry::{PreparedMesh, ray_box};
+use super::geometry::{Corners, GpuVertex, PreparedMesh, ray_box};
 use super::{MeshId, RenderError};
 
 /// Format of the colour texture [`Renderer::render`] produces: plain
@@ -27,8 +27,9 @@ pub const DEFAULT_BACKGROUND: [f32; 4] = [0.10, 0.10, 0.11, 1.0];
 /// Colour of the bounding box lines (sRGB, straight alpha: faint grey).
 const LINE_COLOUR: [f32; 4] = [0.75, 0.75, 0.78, 0.45];
 
-/// Bytes per vertex on the GPU: position and normal, interleaved.
-const VERTEX_BYTES: u64 = 24;
+/// Bytes per vertex on the GPU: quantised position and octahedral normal
+/// ([`GpuVertex`]).
+const VERTEX_BYTES: u64 = std::mem::size_of::<GpuVertex>() as u64;
 
 /// How a mesh is drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,6 +70,10 @@ struct FrameUniform {
 struct StyleUniform {
     colour: [f32; 4],
     flags: [f32; 4],
+    /// World position of quantised 0 (xyz).
+    origin: [f32; 4],
+    /// World units per quantisation step (xyz).
+    scale: [f32; 4],
 }
 
 /// One mesh: the CPU copy for picking, its GPU buffers and style.
@@ -80,6 +85,11 @@ struct Mesh {
     index_count: u32,
     /// Newer geometry on its way to the GPU.
     pending: Option<PendingUpload>,
+    /// The buffers of the geometry drawn before the current one, kept for
+    /// the next upload that spans frames: writing into memory already
+    /// touched costs no page faults (a drag replaces the same mesh again
+    /// and again).
+    spare: Option<(wgpu::Buffer, wgpu::Buffer)>,
     style: MeshStyle,
     style_buffer: wgpu::Buffer,
     style_bind: wgpu::BindGroup,
@@ -181,7 +191,7 @@ impl Renderer {
         });
         let style_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("flexiso mesh style"),
-            entries: &[uniform_entry(wgpu::ShaderStages::FRAGMENT)],
+            entries: &[uniform_entry(wgpu::ShaderStages::VERTEX_FRAGMENT)],
         });
         let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("flexiso frame"),
@@ -217,7 +227,7 @@ impl Renderer {
             immediate_size: 0,
         });
 
-        let mesh_attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let mesh_attributes = wgpu::vertex_attr_array![0 => Unorm16x4, 1 => Snorm16x2];
         let line_attributes = wgpu::vertex_attr_array![0 => Float32x3];
         // Straight-alpha "over" for colour; alpha accumulates so an opaque
         // background stays opaque (egui composites the texture as is).
@@ -396,7 +406,7 @@ impl Renderer {
         let id = id.into();
         let max = device.limits().max_buffer_size;
         let vertex_bytes = mesh.vertices.len() as u64 * VERTEX_BYTES;
-        let index_bytes = mesh.indices.len() as u64 * 4;
+        let index_bytes = mesh.indices.bytes().len() as u64;
         if vertex_bytes > max || index_bytes > max {
             return Err(RenderError::InvalidMesh {
                 id,
@@ -417,6 +427,7 @@ impl Renderer {
                     index_buffer: None,
                     index_count: 0,
                     pending: None,
+                    spare: None,
                     style: MeshStyle::default(),
                     style_buffer,
                     style_bind,
@@ -456,7 +467,7 @@ impl Renderer {
             };
             let mesh = Arc::clone(&pending.mesh);
             let vertices: &[u8] = bytemuck::cast_slice(&mesh.vertices);
-            let indices: &[u8] = bytemuck::cast_slice(&mesh.indices);
+            let indices: &[u8] = mesh.indices.bytes();
             let total = (vertices.len() + indices.len()) as u64;
             let (vb, ib) = if mesh.indices.is_empty() {
                 (None, None)
@@ -485,21 +496,27 @@ impl Renderer {
                     left = true;
                     continue;
                 }
+                let spare = &mut entry.spare;
                 let (vb, ib) = pending.buffers.get_or_insert_with(|| {
-                    (
-                        new_buffer(
-                            device,
-                            vertices.len() as u64,
-                            wgpu::BufferUsages::VERTEX,
-                            "flexiso mesh vertices",
-                        ),
-                        new_buffer(
-                            device,
-                            indices.len() as u64,
-                            wgpu::BufferUsages::INDEX,
-                            "flexiso mesh indices",
-                        ),
-                    )
+                    let fits = |(vb, ib): &(wgpu::Buffer, wgpu::Buffer)| {
+                        vb.size() >= vertices.len() as u64 && ib.size() >= indices.len() as u64
+                    };
+                    spare.take().filter(fits).unwrap_or_else(|| {
+                        (
+                            new_buffer(
+                                device,
+                                vertices.len() as u64,
+                                wgpu::BufferUsages::VERTEX,
+                                "flexiso mesh vertices",
+                            ),
+                            new_buffer(
+                                device,
+                                indices.len() as u64,
+                                wgpu::BufferUsages::INDEX,
+                                "flexiso mesh indices",
+                            ),
+                        )
+                    })
                 });
                 // Vertices first, then indices, in chunks of what the
                 // budget allows.
@@ -522,10 +539,17 @@ impl Renderer {
                     continue;
                 }
                 let (vb, ib) = pending.buffers.take().expect("buffers were created above");
+                if let (Some(old_vb), Some(old_ib)) =
+                    (entry.vertex_buffer.take(), entry.index_buffer.take())
+                {
+                    entry.spare = Some((old_vb, old_ib));
+                }
                 (Some(vb), Some(ib))
             };
             entry.vertex_buffer = vb;
             entry.index_buffer = ib;
+            // The quantisation box is the new geometry's.
+            entry.style_dirty = true;
             entry.index_count = mesh.indices.len() as u32;
             entry.cpu = mesh;
             entry.pending = None;
@@ -721,6 +745,7 @@ impl Renderer {
 
         for mesh in self.meshes.values_mut().filter(|m| m.style_dirty) {
             let c = mesh.style.colour;
+            let (origin, scale) = mesh.cpu.dequantise();
             let uniform = StyleUniform {
                 colour: [
                     linear_from_srgb(c[0]),
@@ -729,6 +754,8 @@ impl Renderer {
                     c[3],
                 ],
                 flags: [f32::from(u8::from(mesh.style.highlighted)), 0.0, 0.0, 0.0],
+                origin: origin.extend(0.0).to_array(),
+                scale: scale.extend(0.0).to_array(),
             };
             queue.write_buffer(&mesh.style_buffer, 0, bytemuck::bytes_of(&uniform));
             mesh.style_dirty = false;
@@ -791,8 +818,18 @@ impl Renderer {
             if let (Some(vb), Some(ib)) = (&m.vertex_buffer, &m.index_buffer) {
                 pass.set_bind_group(1, &m.style_bind, &[]);
                 pass.set_vertex_buffer(0, vb.slice(..));
-                pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..m.index_count, 0, 0..1);
+                match &m.cpu.indices {
+                    Corners::Short { runs, .. } => {
+                        pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint16);
+                        for r in runs {
+                            pass.draw_indexed(r.start..r.end, r.base as i32, 0..1);
+                        }
+                    }
+                    Corners::Long(_) => {
+                        pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                        pass.draw_indexed(0..m.index_count, 0, 0..1);
+                    }
+                }
             }
         };
         pass.set_pipeline(&self.opaque);

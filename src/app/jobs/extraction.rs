@@ -10,15 +10,15 @@
 //! older than what it shows.
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use super::{Job, Notify};
+use super::{Job, JobError, Notify};
 use crate::app::ids::ContourId;
 use crate::app::ids::prepare;
-use crate::contour::{
-    ContourFollower, ContourMesh, FollowerScratch, Isovalue, MeshTopology, path_seed,
-};
-use crate::field::ScalarField;
+use crate::contour::follow::Cancelled;
+use crate::contour::{ContourFollower, ContourMesh, FollowerScratch, MeshTopology, path_seed};
+use crate::field::{Isovalue, ScalarField};
 use crate::render::PreparedMesh;
 use crate::tree::{ArcId, ContourTree};
 
@@ -65,6 +65,12 @@ pub struct Extractions {
     to_measure: HashMap<ContourId, (u64, Arc<ContourMesh>)>,
     /// The follower's per-vertex tables, reused between jobs.
     scratch: Arc<Mutex<Vec<FollowerScratch>>>,
+    /// The newest request per contour: an extraction whose request is no
+    /// longer the newest stops inside the flood (newest isovalue wins).
+    newest: HashMap<ContourId, Arc<AtomicU64>>,
+    /// Triangles of each contour's last mesh: the follower takes a large
+    /// one straight to the parallel sweep.
+    sizes: Arc<Mutex<HashMap<ContourId, usize>>>,
 }
 
 impl std::fmt::Debug for Extractions {
@@ -82,6 +88,8 @@ impl Extractions {
             measure: HashMap::new(),
             to_measure: HashMap::new(),
             scratch: Arc::new(Mutex::new(Vec::new())),
+            newest: HashMap::new(),
+            sizes: Arc::default(),
         }
     }
 
@@ -100,6 +108,9 @@ impl Extractions {
         let (field, tree) = (Arc::clone(field), Arc::clone(tree));
         let pool = Arc::clone(&self.scratch);
         let notify = self.notify.clone();
+        let newest = Arc::clone(self.newest.entry(id).or_default());
+        newest.store(request, Ordering::Relaxed);
+        let sizes = Arc::clone(&self.sizes);
         self.extract
             .entry(id)
             .or_insert_with(|| Job::new(notify))
@@ -110,10 +121,21 @@ impl Extractions {
                     .ok()
                     .and_then(|mut p| p.pop())
                     .unwrap_or_default();
-                let mesh = extract_mesh(&field, &tree, superarc, h, &mut scratch).map(Arc::new);
+                let expected = sizes.lock().ok().and_then(|m| m.get(&id).copied());
+                // Superseded: a newer request for this contour is queued.
+                let cancel = || newest.load(Ordering::Relaxed) != request;
+                let mesh =
+                    extract_mesh(&field, &tree, superarc, h, &mut scratch, expected, &cancel);
                 if let Ok(mut p) = pool.lock() {
                     p.push(scratch);
                 }
+                // Nothing is sent for a cancelled run: the old mesh stays
+                // drawn until the newer request's is complete.
+                let mesh = mesh.map_err(|Cancelled| JobError::Cancelled)?;
+                if let (Some(m), Ok(mut s)) = (&mesh, sizes.lock()) {
+                    s.insert(id, m.num_triangles());
+                }
+                let mesh = mesh.map(Arc::new);
                 let ms = t.elapsed().as_secs_f64() * 1e3;
                 let gpu = mesh.as_deref().and_then(prepare);
                 Ok((request, mesh, gpu, ms))
@@ -125,6 +147,7 @@ impl Extractions {
         self.extract.remove(&id);
         self.measure.remove(&id);
         self.to_measure.remove(&id);
+        self.newest.remove(&id);
     }
 
     /// Forgets every contour.
@@ -132,6 +155,7 @@ impl Extractions {
         self.extract.clear();
         self.measure.clear();
         self.to_measure.clear();
+        self.newest.clear();
     }
 
     /// True while contour `id` has an extraction running or queued.
@@ -215,11 +239,16 @@ pub fn extract_mesh(
     superarc: ArcId,
     h: f64,
     scratch: &mut FollowerScratch,
-) -> Option<ContourMesh> {
+    expected: Option<usize>,
+    cancel: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<ContourMesh>, Cancelled> {
     let iso = Isovalue::new(h);
-    let seed = path_seed(tree, field, superarc, iso)?;
+    let Some(seed) = path_seed(tree, field, superarc, iso) else {
+        return Ok(None);
+    };
+    // On every core for a large contour (see ContourFollower::extract).
     let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
-    let mesh = follower.follow(&seed, iso);
+    let mesh = follower.extract_expecting(&seed, iso, expected, cancel);
     *scratch = follower.into_scratch();
-    Some(mesh)
+    mesh.map(Some)
 }
