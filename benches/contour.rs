@@ -225,6 +225,20 @@ fn serial_vs_parallel(
         .zip(process_cpu())
         .map_or(f64::NAN, |(a, b)| (b - a) / 4.0);
     let _ = cpu0;
+    let p = prepare(&m);
+    let draws = match p.corners() {
+        flexiso::render::geometry::Corners::Short { runs, .. } => runs.len(),
+        flexiso::render::geometry::Corners::Long(_) => 1,
+    };
+    println!(
+        "{name} h = {}: the largest contour on the GPU: {:.1} MB ({} vertices, {} draws of \
+         16-bit index runs; {:.1} MB as 24-byte vertices and 32-bit indices)",
+        iso.value,
+        p.gpu_bytes() as f64 / 1e6,
+        p.num_vertices(),
+        draws,
+        (24 * m.positions.len() + 4 * m.indices.len()) as f64 / 1e6,
+    );
     let mut t_prepare = f64::INFINITY;
     let t_ready = best_of(5, || {
         let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
@@ -392,6 +406,9 @@ fn drag_latency(
     // Five drag steps down the arc, towards its lower end.
     let bottom = field.value(tree.node(tree.arc(arc).lower).vertex);
     let mut last = None;
+    let mut oracle = ContourFollower::new(field);
+    let mut sweep = ContourFollower::new(field).with_serial_limit(0);
+    let (mut worst_serial, mut worst_sweep) = (0f64, 0f64);
     for step in 0..5 {
         let iso = Isovalue::new(h - (h - bottom) * step as f64 / 6.0);
         let t = Instant::now();
@@ -406,6 +423,14 @@ fn drag_latency(
         // GPU on the extracting thread, the UI thread only copies it.
         let prepared = prepare(&mesh);
         let extract = t.elapsed().as_secs_f64() * 1e3;
+        // The same step by the serial follower and by the sweep alone.
+        let t = Instant::now();
+        black_box(prepare(&oracle.follow(&seed, iso)));
+        worst_serial = worst_serial.max(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let swept = sweep.extract(&seed, iso, &|| false).expect("not cancelled");
+        black_box(prepare(&swept));
+        worst_sweep = worst_sweep.max(t.elapsed().as_secs_f64() * 1e3);
         let (mut upload, mut render, mut frames) = (0.0, 0.0, 0);
         if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
             let t = Instant::now();
@@ -437,7 +462,8 @@ fn drag_latency(
     println!(
         "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
          worst step extraction (and preparation) {:.1} ms + upload {:.1} ms ({} frames) = {:.1} ms; \
-         its render {:.1} ms ({})",
+         its render {:.1} ms ({}); worst step extraction and preparation by the serial \
+         follower {:.1} ms, by the sweep {:.1} ms",
         worst.3,
         arc,
         worst.0,
@@ -446,7 +472,9 @@ fn drag_latency(
         worst.0 + worst.1,
         worst.2,
         gpu.as_ref()
-            .map_or("no GPU adapter".into(), |g| g.describe())
+            .map_or("no GPU adapter".into(), |g| g.describe()),
+        worst_serial,
+        worst_sweep,
     );
 }
 
