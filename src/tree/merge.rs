@@ -436,31 +436,78 @@ pub fn augment(
         });
     drop((split_leafward, candidate_place, join_side, split_side));
     let vertex_arc = join_leafward;
-    let is_node = |va: u32| va & NODE_FLAG != 0;
-
-    // Regular vertices of each superarc, in vertex order: count, then place
-    // while walking the order ascending.
-    let mut offsets = vec![0u32; arcs.len() + 1];
-    for &va in &vertex_arc {
-        if !is_node(va) {
-            offsets[va as usize + 1] += 1;
-        }
-    }
-    for a in 1..offsets.len() {
-        offsets[a] += offsets[a - 1];
-    }
-    let mut fill = offsets.clone();
-    let mut arc_vertices = vec![0u32; offsets[arcs.len()] as usize];
-    const AHEAD: usize = 16;
-    for (i, &v) in order.iter().enumerate() {
-        if let Some(&w) = order.get(i + AHEAD) {
-            prefetch(&vertex_arc, w as usize);
-        }
-        let va = vertex_arc[v as usize];
-        if !is_node(va) {
-            arc_vertices[fill[va as usize] as usize] = v;
-            fill[va as usize] += 1;
-        }
-    }
+    let (offsets, arc_vertices) = group_by_arc(&vertex_arc, arcs.len(), order);
     ContourTree::assemble(nodes, arcs, vertex_arc, offsets, arc_vertices)
 }
+
+/// The regular vertices of each superarc in the vertex order: stable
+/// grouping of `order` by superarc. With few superarcs (smooth fields) the
+/// order is cut into chunks, each counted and placed by its own thread
+/// (slots of chunk `i` for an arc follow those of chunks before it);
+/// otherwise one pass, since per-chunk counts would outweigh the vertices.
+fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let is_node = |va: u32| va & NODE_FLAG != 0;
+    let threads = rayon::current_num_threads();
+    let chunks = if threads > 1 && arcs * threads * 4 <= order.len() / 16 {
+        threads * 4
+    } else {
+        1
+    };
+    let chunk_len = order.len().div_ceil(chunks).max(1);
+    const AHEAD: usize = 16;
+    let mut counts: Vec<Vec<u32>> = order
+        .par_chunks(chunk_len)
+        .map(|c| {
+            let mut count = vec![0u32; arcs];
+            for (i, &v) in c.iter().enumerate() {
+                if let Some(&w) = c.get(i + AHEAD) {
+                    prefetch(vertex_arc, w as usize);
+                }
+                let va = vertex_arc[v as usize];
+                if !is_node(va) {
+                    count[va as usize] += 1;
+                }
+            }
+            count
+        })
+        .collect();
+    let mut offsets = vec![0u32; arcs + 1];
+    let mut total = 0u32;
+    for a in 0..arcs {
+        offsets[a] = total;
+        for c in counts.iter_mut() {
+            let here = c[a];
+            c[a] = total;
+            total += here;
+        }
+    }
+    offsets[arcs] = total;
+    let mut arc_vertices = vec![0u32; total as usize];
+    let dst = SharedSlots(arc_vertices.as_mut_ptr());
+    order
+        .par_chunks(chunk_len)
+        .zip(counts.into_par_iter())
+        .for_each(|(c, mut fill)| {
+            let dst = &dst;
+            for (i, &v) in c.iter().enumerate() {
+                if let Some(&w) = c.get(i + AHEAD) {
+                    prefetch(vertex_arc, w as usize);
+                }
+                let va = vertex_arc[v as usize];
+                if !is_node(va) {
+                    let slot = &mut fill[va as usize];
+                    // SAFETY: each (chunk, arc) owns a disjoint range of
+                    // slots below `total` (the prefix sums above), and
+                    // writes each slot once.
+                    unsafe { *dst.0.add(*slot as usize) = v };
+                    *slot += 1;
+                }
+            }
+        });
+    (offsets, arc_vertices)
+}
+
+/// `arc_vertices` written from several threads at disjoint slots.
+struct SharedSlots(*mut u32);
+// SAFETY: only used for writes to disjoint slots (see `group_by_arc`).
+unsafe impl Sync for SharedSlots {}

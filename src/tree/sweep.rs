@@ -162,8 +162,18 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
         let at = |i: usize| if join { order[n - 1 - i] } else { order[i] };
         let v = at(i);
         if i + AHEAD < n {
+            // A vertex that is not a candidate reads one neighbour's word
+            // and writes its own: two lines, not its whole star. Its code
+            // was prefetched AHEAD vertices ago.
             let w = at(i + AHEAD);
-            mesh.prefetch_star(w, &leafward);
+            let cw = link_codes[w as usize];
+            if is_candidate(cw) {
+                mesh.prefetch_star(w, &leafward);
+            } else {
+                let c = if join { cw & 0xf } else { cw >> 4 };
+                prefetch(&leafward, mesh.neighbour_at(w, c) as usize);
+                prefetch(&leafward, w as usize);
+            }
             if i + 2 * AHEAD < n {
                 let w2 = at(i + 2 * AHEAD) as usize;
                 prefetch(link_codes, w2);
