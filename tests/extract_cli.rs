@@ -67,10 +67,11 @@ fn ply_bytes_counts(bytes: &[u8]) -> (usize, usize) {
             .expect("element count")
     };
     let (nv, nf) = (count("vertex"), count("face"));
-    // 6 floats per vertex; per face: count byte, 3 ints, contour int.
-    assert_eq!(bytes.len() - end, nv * 24 + nf * 17, "PLY body size");
+    // Per vertex: 6 floats, 3 colour bytes, the contour int; per face: the
+    // count byte and 3 ints.
+    assert_eq!(bytes.len() - end, nv * 31 + nf * 13, "PLY body size");
     for f in 0..nf {
-        let at = end + nv * 24 + f * 17;
+        let at = end + nv * 31 + f * 13;
         assert_eq!(bytes[at], 3, "triangles only");
         for k in 0..3 {
             let i = at + 1 + 4 * k;

@@ -1,7 +1,16 @@
-//! Writing contours to files: binary little-endian PLY (one face property
-//! `contour` per triangle naming its object), Wavefront OBJ (one `o` object
-//! per contour, with normals) and binary STL (triangles only, facet normals).
-//! The format follows the file's extension.
+//! Writing contours to files: binary little-endian PLY, Wavefront OBJ (one
+//! `o` object per contour, with normals) and binary STL (triangles only,
+//! facet normals). The format follows the file's extension.
+//!
+//! PLY: each vertex carries its normal, a colour (`red green blue`, one
+//! per contour) and the index of its contour (`int contour`); faces carry
+//! only `vertex_indices`. Keeping the id on the vertices is what the
+//! common readers understand: meshio reads per-face properties of binary
+//! PLY wrongly (it takes them as whole columns), VTK's reader drops unknown
+//! face properties but shows vertex colours, trimesh keeps both. A
+//! `comment contour I NAME` line per contour maps each index to its
+//! object (e.g. `arc_UPPER_LOWER`), and the note (isovalue, space) is a
+//! comment too.
 
 use super::ContourMesh;
 use std::borrow::Borrow;
@@ -108,50 +117,73 @@ pub fn write_mesh(
 ) -> io::Result<()> {
     let note: String = note.chars().filter(|c| !c.is_control()).collect();
     match format {
-        MeshFormat::Ply => write_ply(w, contours, &note),
+        MeshFormat::Ply => write_ply(w, contours, names, &note),
         MeshFormat::Obj => write_obj(w, contours, names, &note),
         MeshFormat::Stl => write_stl(w, contours, &note),
     }
 }
 
-/// Binary PLY: vertices with normals, faces with the index of their
-/// contour.
+/// Distinct colours (sRGB bytes), one per contour in turn.
+const COLOURS: [[u8; 3]; 8] = [
+    [227, 115, 51],
+    [77, 153, 217],
+    [115, 191, 89],
+    [217, 89, 140],
+    [230, 191, 64],
+    [140, 115, 204],
+    [89, 191, 191],
+    [191, 140, 102],
+];
+
+/// Binary PLY (see the module doc): vertices with normal, colour and
+/// contour index; triangles.
 pub fn write_ply(
     w: &mut impl Write,
     contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
     note: &str,
 ) -> io::Result<()> {
     let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
     let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
-    let note = if note.is_empty() {
-        String::new()
-    } else {
-        format!("comment {note}\n")
-    };
+    let mut comments = String::new();
+    if !note.is_empty() {
+        comments += &format!("comment {note}\n");
+    }
+    for i in 0..contours.len() {
+        let name = names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("contour_{i}"));
+        let name: String = name.chars().filter(|c| !c.is_control()).collect();
+        comments += &format!("comment contour {i} {name}\n");
+    }
     write!(
         w,
-        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n{note}\
+        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n{comments}\
          element vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
          property float nx\nproperty float ny\nproperty float nz\n\
-         element face {nf}\nproperty list uchar int vertex_indices\nproperty int contour\nend_header\n"
+         property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int contour\n\
+         element face {nf}\nproperty list uchar int vertex_indices\nend_header\n"
     )?;
-    for c in contours {
+    for (i, c) in contours.iter().enumerate() {
         let c = c.borrow();
+        let colour = COLOURS[i % COLOURS.len()];
         for (p, n) in c.positions.iter().zip(&c.normals) {
             for x in p.iter().chain(n) {
                 w.write_all(&x.to_le_bytes())?;
             }
+            w.write_all(&colour)?;
+            w.write_all(&(i as i32).to_le_bytes())?;
         }
     }
     let mut base = 0u32;
-    for (i, c) in contours.iter().enumerate() {
+    for c in contours {
         let c = c.borrow();
         for t in c.indices.chunks_exact(3) {
             w.write_all(&[3u8])?;
             for &v in t {
                 w.write_all(&((base + v) as i32).to_le_bytes())?;
             }
-            w.write_all(&(i as i32).to_le_bytes())?;
         }
         base += c.positions.len() as u32;
     }
