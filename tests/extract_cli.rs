@@ -437,3 +437,27 @@ fn world_coordinates_place_the_mesh_on_the_volume_and_index_on_the_grid() {
         "{wlo:?} {lo:?}"
     );
 }
+
+#[test]
+fn extract_writes_vtk_polydata_with_the_contour_per_triangle() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let vtp = dir.path().join("all.vtp");
+    let (_, table) = extract(&[
+        "extract",
+        "synthetic:24",
+        "--iso",
+        "0.5",
+        "--out",
+        vtp.to_str().expect("utf-8"),
+    ]);
+    let tris: usize = table.iter().map(|r| r.triangles).sum();
+    let verts: usize = table.iter().map(|r| r.vertices).sum();
+    let text = std::fs::read_to_string(&vtp).expect("vtp");
+    assert!(text.starts_with("<?xml") && text.contains("type=\"PolyData\""));
+    assert!(
+        text.contains(&format!("NumberOfPoints=\"{verts}\""))
+            && text.contains(&format!("NumberOfPolys=\"{tris}\"")),
+        "counts as printed"
+    );
+    assert!(text.contains("Name=\"contour\"") && text.contains("Name=\"contour_names\""));
+}

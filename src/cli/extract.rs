@@ -80,6 +80,8 @@ pub enum FormatArg {
     Obj,
     /// Binary STL.
     Stl,
+    /// VTK XML PolyData.
+    Vtp,
 }
 
 impl From<FormatArg> for MeshFormat {
@@ -88,6 +90,7 @@ impl From<FormatArg> for MeshFormat {
             FormatArg::Ply => MeshFormat::Ply,
             FormatArg::Obj => MeshFormat::Obj,
             FormatArg::Stl => MeshFormat::Stl,
+            FormatArg::Vtp => MeshFormat::Vtp,
         }
     }
 }
@@ -99,11 +102,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, _) => None,
         (Some(_), Some(f)) => Some(MeshFormat::from(f)),
         (Some(out), None) if super::is_stdio(out) => {
-            bail!("--out - needs --format ply, obj or stl");
+            bail!("--out - needs --format ply, obj, stl or vtp");
         }
         (Some(out), None) => Some(MeshFormat::from_path(out).with_context(|| {
             format!(
-                "{}: unknown mesh format; use a .ply, .obj or .stl file name, or --format",
+                "{}: unknown mesh format; use a .ply, .obj, .stl or .vtp file name, or --format",
                 out.display()
             )
         })?),

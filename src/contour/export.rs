@@ -1,6 +1,8 @@
 //! Writing contours to files: binary little-endian PLY, Wavefront OBJ (one
-//! `o` object per contour, with normals) and binary STL (triangles only,
-//! facet normals). The format follows the file's extension.
+//! `o` object per contour, with normals), binary STL (triangles only,
+//! facet normals) and VTK XML PolyData (`.vtp`: the contour index per
+//! triangle as cell data, the names as field data). The format follows the
+//! file's extension.
 //!
 //! PLY: each vertex carries its normal, a colour (`red green blue`, one
 //! per contour) and the index of its contour (`int contour`); faces carry
@@ -22,7 +24,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum ExportError {
     /// The extension names no format we write.
-    #[error("{path}: unknown mesh format (use .ply, .obj or .stl)")]
+    #[error("{path}: unknown mesh format (use .ply, .obj, .stl or .vtp)")]
     UnknownFormat {
         /// The file.
         path: String,
@@ -47,6 +49,8 @@ pub enum MeshFormat {
     Obj,
     /// Binary STL.
     Stl,
+    /// VTK XML PolyData (`.vtp`), binary.
+    Vtp,
 }
 
 impl MeshFormat {
@@ -57,6 +61,7 @@ impl MeshFormat {
             "ply" => Some(Self::Ply),
             "obj" => Some(Self::Obj),
             "stl" => Some(Self::Stl),
+            "vtp" => Some(Self::Vtp),
             _ => None,
         }
     }
@@ -120,7 +125,132 @@ pub fn write_mesh(
         MeshFormat::Ply => write_ply(w, contours, names, &note),
         MeshFormat::Obj => write_obj(w, contours, names, &note),
         MeshFormat::Stl => write_stl(w, contours, &note),
+        MeshFormat::Vtp => write_vtp(w, contours, names, &note),
     }
+}
+
+/// One binary DataArray of a VTK XML file: base64 of a UInt64 byte count
+/// then the little-endian data.
+fn vtk_array(
+    w: &mut impl Write,
+    ty: &str,
+    name: &str,
+    comps: usize,
+    data: &[u8],
+) -> io::Result<()> {
+    use base64::Engine as _;
+    let mut raw = (data.len() as u64).to_le_bytes().to_vec();
+    raw.extend_from_slice(data);
+    let name = if name.is_empty() {
+        String::new()
+    } else {
+        format!(" Name=\"{name}\"")
+    };
+    writeln!(
+        w,
+        "<DataArray type=\"{ty}\"{name} NumberOfComponents=\"{comps}\" format=\"binary\">{}</DataArray>",
+        base64::engine::general_purpose::STANDARD.encode(raw)
+    )
+}
+
+/// VTK XML PolyData, binary (base64 inline): points with normals
+/// (`Normals`), triangles with the index of their contour (cell data
+/// `contour`), and field data naming each index's object (`contour_names`,
+/// a string array) and the note (`note`).
+pub fn write_vtp(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    note: &str,
+) -> io::Result<()> {
+    let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
+    let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
+    let escape = |s: &str| -> String {
+        s.chars()
+            .filter(|c| !c.is_control())
+            .map(|c| match c {
+                '<' | '>' | '&' | '"' => '_',
+                c => c,
+            })
+            .collect()
+    };
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        w,
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+    )?;
+    writeln!(w, "<PolyData>")?;
+    // Field data: the names as a string array (ASCII: each string's bytes
+    // then a 0, as VTK writes vtkStringArray), and the note.
+    let strings = |items: &[String]| -> String {
+        items
+            .iter()
+            .flat_map(|s| escape(s).into_bytes().into_iter().chain([0u8]))
+            .map(|b| b.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let all: Vec<String> = (0..contours.len())
+        .map(|i| {
+            names
+                .get(i)
+                .cloned()
+                .unwrap_or_else(|| format!("contour_{i}"))
+        })
+        .collect();
+    writeln!(w, "<FieldData>")?;
+    writeln!(
+        w,
+        "<Array type=\"String\" Name=\"contour_names\" NumberOfTuples=\"{}\" format=\"ascii\">{}</Array>",
+        all.len(),
+        strings(&all)
+    )?;
+    writeln!(
+        w,
+        "<Array type=\"String\" Name=\"note\" NumberOfTuples=\"1\" format=\"ascii\">{}</Array>",
+        strings(&[note.to_owned()])
+    )?;
+    writeln!(w, "</FieldData>")?;
+    writeln!(
+        w,
+        "<Piece NumberOfPoints=\"{nv}\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"{nf}\">"
+    )?;
+    let (mut points, mut normals) = (Vec::new(), Vec::new());
+    let (mut connectivity, mut offsets, mut ids) = (Vec::new(), Vec::new(), Vec::new());
+    let mut base = 0i64;
+    for (i, c) in contours.iter().enumerate() {
+        let c = c.borrow();
+        for (p, n) in c.positions.iter().zip(&c.normals) {
+            p.iter()
+                .for_each(|x| points.extend_from_slice(&x.to_le_bytes()));
+            n.iter()
+                .for_each(|x| normals.extend_from_slice(&x.to_le_bytes()));
+        }
+        for t in c.indices.chunks_exact(3) {
+            for &v in t {
+                connectivity.extend_from_slice(&(base + i64::from(v)).to_le_bytes());
+            }
+            offsets.extend_from_slice(&((connectivity.len() / 8) as i64).to_le_bytes());
+            ids.extend_from_slice(&(i as i32).to_le_bytes());
+        }
+        base += c.positions.len() as i64;
+    }
+    writeln!(w, "<PointData Normals=\"Normals\">")?;
+    vtk_array(w, "Float32", "Normals", 3, &normals)?;
+    writeln!(w, "</PointData>")?;
+    writeln!(w, "<CellData Scalars=\"contour\">")?;
+    vtk_array(w, "Int32", "contour", 1, &ids)?;
+    writeln!(w, "</CellData>")?;
+    writeln!(w, "<Points>")?;
+    vtk_array(w, "Float32", "Points", 3, &points)?;
+    writeln!(w, "</Points>")?;
+    writeln!(w, "<Polys>")?;
+    vtk_array(w, "Int64", "connectivity", 1, &connectivity)?;
+    vtk_array(w, "Int64", "offsets", 1, &offsets)?;
+    writeln!(w, "</Polys>")?;
+    writeln!(w, "</Piece>")?;
+    writeln!(w, "</PolyData>")?;
+    writeln!(w, "</VTKFile>")
 }
 
 /// Distinct colours (sRGB bytes), one per contour in turn.
