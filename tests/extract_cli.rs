@@ -67,10 +67,11 @@ fn ply_bytes_counts(bytes: &[u8]) -> (usize, usize) {
             .expect("element count")
     };
     let (nv, nf) = (count("vertex"), count("face"));
-    // 6 floats per vertex; per face: count byte, 3 ints, contour int.
-    assert_eq!(bytes.len() - end, nv * 24 + nf * 17, "PLY body size");
+    // Per vertex: 6 floats, 3 colour bytes, the contour int; per face: the
+    // count byte and 3 ints.
+    assert_eq!(bytes.len() - end, nv * 31 + nf * 13, "PLY body size");
     for f in 0..nf {
-        let at = end + nv * 24 + f * 17;
+        let at = end + nv * 31 + f * 13;
         assert_eq!(bytes[at], 3, "triangles only");
         for k in 0..3 {
             let i = at + 1 + 4 * k;
@@ -435,4 +436,28 @@ fn world_coordinates_place_the_mesh_on_the_volume_and_index_on_the_grid() {
         (wlo[0] - (-12.5 + 1.1 * lo[1])).abs() < 1e-2,
         "{wlo:?} {lo:?}"
     );
+}
+
+#[test]
+fn extract_writes_vtk_polydata_with_the_contour_per_triangle() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let vtp = dir.path().join("all.vtp");
+    let (_, table) = extract(&[
+        "extract",
+        "synthetic:24",
+        "--iso",
+        "0.5",
+        "--out",
+        vtp.to_str().expect("utf-8"),
+    ]);
+    let tris: usize = table.iter().map(|r| r.triangles).sum();
+    let verts: usize = table.iter().map(|r| r.vertices).sum();
+    let text = std::fs::read_to_string(&vtp).expect("vtp");
+    assert!(text.starts_with("<?xml") && text.contains("type=\"PolyData\""));
+    assert!(
+        text.contains(&format!("NumberOfPoints=\"{verts}\""))
+            && text.contains(&format!("NumberOfPolys=\"{tris}\"")),
+        "counts as printed"
+    );
+    assert!(text.contains("Name=\"contour\"") && text.contains("Name=\"contour_names\""));
 }

@@ -309,3 +309,41 @@ fn nifti2_reads_its_values_spacing_and_sform() {
         "voxel (1, 2, 1)",
     );
 }
+
+#[test]
+fn mgh_and_mgz_read_values_spacing_and_the_ras_placement() {
+    let dir = tempfile::tempdir().unwrap();
+    let vals = reference("int16", 60);
+    let mut h = vec![0u8; 284];
+    let put_i32 = |h: &mut Vec<u8>, o: usize, v: i32| h[o..o + 4].copy_from_slice(&v.to_be_bytes());
+    let put_f32 = |h: &mut Vec<u8>, o: usize, v: f32| h[o..o + 4].copy_from_slice(&v.to_be_bytes());
+    put_i32(&mut h, 0, 1);
+    for (k, d) in [5, 4, 3, 1].iter().enumerate() {
+        put_i32(&mut h, 4 + 4 * k, *d);
+    }
+    put_i32(&mut h, 20, 4); // short
+    h[28..30].copy_from_slice(&1i16.to_be_bytes());
+    for (k, s) in [2.0f32, 1.0, 3.0].iter().enumerate() {
+        put_f32(&mut h, 30 + 4 * k, *s);
+    }
+    // Mdc: FreeSurfer's conformed orientation: x -> -R, y -> -S, z -> +A.
+    let mdc = [-1.0f32, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0];
+    for (k, m) in mdc.iter().enumerate() {
+        put_f32(&mut h, 42 + 4 * k, *m);
+    }
+    for (k, c) in [10.0f32, 20.0, 30.0].iter().enumerate() {
+        put_f32(&mut h, 78 + 4 * k, *c);
+    }
+    h.extend_from_slice(&encode(&vals, "int16", true));
+    let mgh = write(dir.path(), "v.mgh", &h);
+    let mgz = write(dir.path(), "v.mgz", &gzip(&h));
+    for p in [mgh, mgz] {
+        let v = read(&p).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(v.field.dims(), [5, 4, 3]);
+        assert_eq!(as_f64(v.field.values()), vals);
+        assert_eq!(v.field.spacing(), [2.0, 1.0, 3.0]);
+        assert_eq!(v.field.geometry().space, Space::Ras);
+        // Vertex 0 at c_ras - (x: -1·2·5/2, y: -S·1·4/2, z: +A·3·3/2).
+        assert_close(v.field.world_position(0), [15.0, 15.5, 32.0], "vertex 0");
+    }
+}

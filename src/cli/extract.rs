@@ -8,6 +8,12 @@
 //! for the one spanning `H`), so pruned features are left out. The file's
 //! extension picks the format (`.ply` binary, `.obj`, `.stl`).
 //!
+//! Written meshes have the vertices a cut exactly at a vertex value puts at
+//! one place welded ([`ContourMesh::weld`]), every closed contour facing
+//! out (positive signed volume, [`ContourMesh::orient_outward`]; open ones
+//! keep their normals downhill), and positions in world coordinates
+//! (`--space world`, the default) or voxel indices (`--space index`).
+//!
 //! The printout lists every contour, largest first (the file's order):
 //! arc, triangles, vertices, area, enclosed volume when closed, Euler
 //! characteristic, genus, and the Euler characteristic the tree predicts
@@ -74,6 +80,8 @@ pub enum FormatArg {
     Obj,
     /// Binary STL.
     Stl,
+    /// VTK XML PolyData.
+    Vtp,
 }
 
 impl From<FormatArg> for MeshFormat {
@@ -82,6 +90,7 @@ impl From<FormatArg> for MeshFormat {
             FormatArg::Ply => MeshFormat::Ply,
             FormatArg::Obj => MeshFormat::Obj,
             FormatArg::Stl => MeshFormat::Stl,
+            FormatArg::Vtp => MeshFormat::Vtp,
         }
     }
 }
@@ -93,11 +102,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         (None, _) => None,
         (Some(_), Some(f)) => Some(MeshFormat::from(f)),
         (Some(out), None) if super::is_stdio(out) => {
-            bail!("--out - needs --format ply, obj or stl");
+            bail!("--out - needs --format ply, obj, stl or vtp");
         }
         (Some(out), None) => Some(MeshFormat::from_path(out).with_context(|| {
             format!(
-                "{}: unknown mesh format; use a .ply, .obj or .stl file name, or --format",
+                "{}: unknown mesh format; use a .ply, .obj, .stl or .vtp file name, or --format",
                 out.display()
             )
         })?),
@@ -189,6 +198,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seeding * 1e6 / targets.len().max(1) as f64
     );
     contours.retain(|(_, m)| m.num_triangles() > 0);
+    // What is written: vertices cut at a vertex value welded, closed
+    // contours facing out.
+    contours.par_iter_mut().for_each(|(_, m)| {
+        m.weld();
+        m.orient_outward();
+    });
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
     let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();
     report!(

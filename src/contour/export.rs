@@ -1,7 +1,18 @@
-//! Writing contours to files: binary little-endian PLY (one face property
-//! `contour` per triangle naming its object), Wavefront OBJ (one `o` object
-//! per contour, with normals) and binary STL (triangles only, facet normals).
-//! The format follows the file's extension.
+//! Writing contours to files: binary little-endian PLY, Wavefront OBJ (one
+//! `o` object per contour, with normals), binary STL (triangles only,
+//! facet normals) and VTK XML PolyData (`.vtp`: the contour index per
+//! triangle as cell data, the names as field data). The format follows the
+//! file's extension.
+//!
+//! PLY: each vertex carries its normal, a colour (`red green blue`, one
+//! per contour) and the index of its contour (`int contour`); faces carry
+//! only `vertex_indices`. Keeping the id on the vertices is what the
+//! common readers understand: meshio reads per-face properties of binary
+//! PLY wrongly (it takes them as whole columns), VTK's reader drops unknown
+//! face properties but shows vertex colours, trimesh keeps both. A
+//! `comment contour I NAME` line per contour maps each index to its
+//! object (e.g. `arc_UPPER_LOWER`), and the note (isovalue, space) is a
+//! comment too.
 
 use super::ContourMesh;
 use std::borrow::Borrow;
@@ -13,7 +24,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum ExportError {
     /// The extension names no format we write.
-    #[error("{path}: unknown mesh format (use .ply, .obj or .stl)")]
+    #[error("{path}: unknown mesh format (use .ply, .obj, .stl or .vtp)")]
     UnknownFormat {
         /// The file.
         path: String,
@@ -38,6 +49,8 @@ pub enum MeshFormat {
     Obj,
     /// Binary STL.
     Stl,
+    /// VTK XML PolyData (`.vtp`), binary.
+    Vtp,
 }
 
 impl MeshFormat {
@@ -48,6 +61,7 @@ impl MeshFormat {
             "ply" => Some(Self::Ply),
             "obj" => Some(Self::Obj),
             "stl" => Some(Self::Stl),
+            "vtp" => Some(Self::Vtp),
             _ => None,
         }
     }
@@ -108,50 +122,198 @@ pub fn write_mesh(
 ) -> io::Result<()> {
     let note: String = note.chars().filter(|c| !c.is_control()).collect();
     match format {
-        MeshFormat::Ply => write_ply(w, contours, &note),
+        MeshFormat::Ply => write_ply(w, contours, names, &note),
         MeshFormat::Obj => write_obj(w, contours, names, &note),
         MeshFormat::Stl => write_stl(w, contours, &note),
+        MeshFormat::Vtp => write_vtp(w, contours, names, &note),
     }
 }
 
-/// Binary PLY: vertices with normals, faces with the index of their
-/// contour.
-pub fn write_ply(
+/// One binary DataArray of a VTK XML file: base64 of a UInt64 byte count
+/// then the little-endian data.
+fn vtk_array(
+    w: &mut impl Write,
+    ty: &str,
+    name: &str,
+    comps: usize,
+    data: &[u8],
+) -> io::Result<()> {
+    use base64::Engine as _;
+    let mut raw = (data.len() as u64).to_le_bytes().to_vec();
+    raw.extend_from_slice(data);
+    let name = if name.is_empty() {
+        String::new()
+    } else {
+        format!(" Name=\"{name}\"")
+    };
+    writeln!(
+        w,
+        "<DataArray type=\"{ty}\"{name} NumberOfComponents=\"{comps}\" format=\"binary\">{}</DataArray>",
+        base64::engine::general_purpose::STANDARD.encode(raw)
+    )
+}
+
+/// VTK XML PolyData, binary (base64 inline): points with normals
+/// (`Normals`), triangles with the index of their contour (cell data
+/// `contour`), and field data naming each index's object (`contour_names`,
+/// a string array) and the note (`note`).
+pub fn write_vtp(
     w: &mut impl Write,
     contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
     note: &str,
 ) -> io::Result<()> {
     let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
     let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
-    let note = if note.is_empty() {
-        String::new()
-    } else {
-        format!("comment {note}\n")
+    let escape = |s: &str| -> String {
+        s.chars()
+            .filter(|c| !c.is_control())
+            .map(|c| match c {
+                '<' | '>' | '&' | '"' => '_',
+                c => c,
+            })
+            .collect()
     };
+    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        w,
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+    )?;
+    writeln!(w, "<PolyData>")?;
+    // Field data: the names as a string array (ASCII: each string's bytes
+    // then a 0, as VTK writes vtkStringArray), and the note.
+    let strings = |items: &[String]| -> String {
+        items
+            .iter()
+            .flat_map(|s| escape(s).into_bytes().into_iter().chain([0u8]))
+            .map(|b| b.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let all: Vec<String> = (0..contours.len())
+        .map(|i| {
+            names
+                .get(i)
+                .cloned()
+                .unwrap_or_else(|| format!("contour_{i}"))
+        })
+        .collect();
+    writeln!(w, "<FieldData>")?;
+    writeln!(
+        w,
+        "<Array type=\"String\" Name=\"contour_names\" NumberOfTuples=\"{}\" format=\"ascii\">{}</Array>",
+        all.len(),
+        strings(&all)
+    )?;
+    writeln!(
+        w,
+        "<Array type=\"String\" Name=\"note\" NumberOfTuples=\"1\" format=\"ascii\">{}</Array>",
+        strings(&[note.to_owned()])
+    )?;
+    writeln!(w, "</FieldData>")?;
+    writeln!(
+        w,
+        "<Piece NumberOfPoints=\"{nv}\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"{nf}\">"
+    )?;
+    let (mut points, mut normals) = (Vec::new(), Vec::new());
+    let (mut connectivity, mut offsets, mut ids) = (Vec::new(), Vec::new(), Vec::new());
+    let mut base = 0i64;
+    for (i, c) in contours.iter().enumerate() {
+        let c = c.borrow();
+        for (p, n) in c.positions.iter().zip(&c.normals) {
+            p.iter()
+                .for_each(|x| points.extend_from_slice(&x.to_le_bytes()));
+            n.iter()
+                .for_each(|x| normals.extend_from_slice(&x.to_le_bytes()));
+        }
+        for t in c.indices.chunks_exact(3) {
+            for &v in t {
+                connectivity.extend_from_slice(&(base + i64::from(v)).to_le_bytes());
+            }
+            offsets.extend_from_slice(&((connectivity.len() / 8) as i64).to_le_bytes());
+            ids.extend_from_slice(&(i as i32).to_le_bytes());
+        }
+        base += c.positions.len() as i64;
+    }
+    writeln!(w, "<PointData Normals=\"Normals\">")?;
+    vtk_array(w, "Float32", "Normals", 3, &normals)?;
+    writeln!(w, "</PointData>")?;
+    writeln!(w, "<CellData Scalars=\"contour\">")?;
+    vtk_array(w, "Int32", "contour", 1, &ids)?;
+    writeln!(w, "</CellData>")?;
+    writeln!(w, "<Points>")?;
+    vtk_array(w, "Float32", "Points", 3, &points)?;
+    writeln!(w, "</Points>")?;
+    writeln!(w, "<Polys>")?;
+    vtk_array(w, "Int64", "connectivity", 1, &connectivity)?;
+    vtk_array(w, "Int64", "offsets", 1, &offsets)?;
+    writeln!(w, "</Polys>")?;
+    writeln!(w, "</Piece>")?;
+    writeln!(w, "</PolyData>")?;
+    writeln!(w, "</VTKFile>")
+}
+
+/// Distinct colours (sRGB bytes), one per contour in turn.
+const COLOURS: [[u8; 3]; 8] = [
+    [227, 115, 51],
+    [77, 153, 217],
+    [115, 191, 89],
+    [217, 89, 140],
+    [230, 191, 64],
+    [140, 115, 204],
+    [89, 191, 191],
+    [191, 140, 102],
+];
+
+/// Binary PLY (see the module doc): vertices with normal, colour and
+/// contour index; triangles.
+pub fn write_ply(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    note: &str,
+) -> io::Result<()> {
+    let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
+    let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
+    let mut comments = String::new();
+    if !note.is_empty() {
+        comments += &format!("comment {note}\n");
+    }
+    for i in 0..contours.len() {
+        let name = names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("contour_{i}"));
+        let name: String = name.chars().filter(|c| !c.is_control()).collect();
+        comments += &format!("comment contour {i} {name}\n");
+    }
     write!(
         w,
-        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n{note}\
+        "ply\nformat binary_little_endian 1.0\ncomment flexiso contours\n{comments}\
          element vertex {nv}\nproperty float x\nproperty float y\nproperty float z\n\
          property float nx\nproperty float ny\nproperty float nz\n\
-         element face {nf}\nproperty list uchar int vertex_indices\nproperty int contour\nend_header\n"
+         property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int contour\n\
+         element face {nf}\nproperty list uchar int vertex_indices\nend_header\n"
     )?;
-    for c in contours {
+    for (i, c) in contours.iter().enumerate() {
         let c = c.borrow();
+        let colour = COLOURS[i % COLOURS.len()];
         for (p, n) in c.positions.iter().zip(&c.normals) {
             for x in p.iter().chain(n) {
                 w.write_all(&x.to_le_bytes())?;
             }
+            w.write_all(&colour)?;
+            w.write_all(&(i as i32).to_le_bytes())?;
         }
     }
     let mut base = 0u32;
-    for (i, c) in contours.iter().enumerate() {
+    for c in contours {
         let c = c.borrow();
         for t in c.indices.chunks_exact(3) {
             w.write_all(&[3u8])?;
             for &v in t {
                 w.write_all(&((base + v) as i32).to_le_bytes())?;
             }
-            w.write_all(&(i as i32).to_le_bytes())?;
         }
         base += c.positions.len() as u32;
     }

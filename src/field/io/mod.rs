@@ -9,7 +9,8 @@
 //! | MetaImage | [`metaimage`] | `.mha` (attached), `.mhd` + `.raw`/`.zraw` |
 //! | VTK legacy | [`vtk`] | `.vtk` STRUCTURED_POINTS, SCALARS or COLOR_SCALARS, binary (big-endian) or ASCII |
 //! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw or base64; zlib |
-//! | NIfTI-1 | [`nifti`] | `.nii`, `.nii.gz`, `.hdr` + `.img` |
+//! | NIfTI-1, NIfTI-2 | [`nifti`] | `.nii`, `.nii.gz`, `.hdr` + `.img` |
+//! | MGH | [`mgh`] | FreeSurfer `.mgh`, `.mgz` |
 //! | raw | [`raw`] | `NAME_XxYxZ_TYPE.raw`, or any file with [`ReadOptions::raw`] |
 //! | TIFF | [`stack`] | `.tif`, `.tiff`: one grayscale page, or a multi-page 3D volume |
 //! | image stack | [`stack`] | a folder of 8/16-bit gray PNG or grayscale TIFF slices |
@@ -43,6 +44,7 @@
 
 pub mod data;
 pub mod metaimage;
+pub mod mgh;
 pub mod nifti;
 pub mod nrrd;
 pub mod raw;
@@ -469,6 +471,9 @@ pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError>
     if ext(".raw") {
         return raw::read_by_name(path, opts);
     }
+    if ext(".mgh") || ext(".mgz") {
+        return mgh::read(path, opts);
+    }
     if ext(".png") || ext(".tif") || ext(".tiff") {
         return stack::read_single(path, opts);
     }
@@ -496,7 +501,7 @@ pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError>
     }
     Err(invalid(
         path,
-        "unknown volume format (expected .nrrd, .nhdr, .mha, .mhd, .vtk, .vti, .nii, .nii.gz, \
+        "unknown volume format (expected .nrrd, .nhdr, .mha, .mhd, .vtk, .vti, .nii, .nii.gz, .mgh, .mgz, .tif, \
          NAME_XxYxZ_TYPE.raw, or a folder of PNG/TIFF slices; for other raw files give --dims and --type)",
     ))
 }
