@@ -85,8 +85,8 @@ fn info_prints_format_dims_type_range_histogram_and_memory() {
         "range:     0 .. 255",
         "distinct:  256 values",
         "histogram: 10 bins",
-        "26 bytes per vertex",
-        "about 6.8 MiB",
+        "16 bytes per vertex",
+        "about 4.2 MiB",
     ] {
         assert!(out.contains(want), "missing '{want}' in\n{out}");
     }
