@@ -36,6 +36,10 @@ pub struct Args {
     /// `index` (voxel indices).
     #[arg(long, value_enum, default_value_t = SpaceArg::World)]
     pub space: SpaceArg,
+    /// Lay the simplified level out as the explorer draws it (printed
+    /// crossings; with --json, a "layout" object inside "simplified").
+    #[arg(long)]
+    pub layout: bool,
 }
 
 /// Runs `flexiso tree`.
@@ -107,6 +111,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         None
     };
+    let layout = match (&level, args.layout) {
+        (Some(level), true) => {
+            let t = Instant::now();
+            let drawn =
+                crate::simplify::layout::TreeLayout::new(level.simplification()).level(level);
+            report!(
+                r,
+                "layout:         {} nodes, {} arcs, {} crossings ({:.3} s)",
+                drawn.nodes.len(),
+                drawn.arcs.len(),
+                drawn.crossings(),
+                t.elapsed().as_secs_f64()
+            );
+            Some(drawn)
+        }
+        (None, true) => anyhow::bail!(
+            "--layout lays out a simplified level: add --simplify N or --feature-size X"
+        ),
+        _ => None,
+    };
     let s = |d: std::time::Duration| d.as_secs_f64();
     report!(
         r,
@@ -131,10 +155,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
             );
             if let Some(level) = &level {
-                obj.insert(
-                    "simplified".into(),
-                    crate::simplify::json::simplified_tree_json(level, &tree),
-                );
+                let mut simplified = crate::simplify::json::simplified_tree_json(level, &tree);
+                if let (Some(drawn), Some(o)) = (&layout, simplified.as_object_mut()) {
+                    o.insert("layout".into(), drawn.to_json(level.simplification()));
+                }
+                obj.insert("simplified".into(), simplified);
             }
         }
         let mut text = serde_json::to_string(&json)?;

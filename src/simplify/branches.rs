@@ -42,6 +42,11 @@ pub struct Branches {
     /// Per branch: its extremum (the pruned leaf's end; for a root, its
     /// arc's upper node).
     tip: Vec<u32>,
+    /// Per arc id: the branch it lies on (the arc finally pruned, or the
+    /// root, that the reductions made from it end in).
+    arc_branch: Vec<u32>,
+    /// Per branch: true when its tip is a minimum (a lower leaf pruned).
+    lower_tip: Vec<bool>,
 }
 
 impl Branches {
@@ -94,7 +99,9 @@ impl Branches {
         }
         let branches = nsteps + roots.len().max(1);
         let mut tip = vec![NONE; branches];
+        let mut lower_tip = vec![false; branches];
         for (k, s) in steps.iter().enumerate() {
+            lower_tip[k] = s.lower_leaf;
             let leaf = if s.lower_leaf {
                 sim.lower(s.pruned)
             } else {
@@ -145,7 +152,29 @@ impl Branches {
             children,
             attach,
             tip,
+            arc_branch: owner,
+            lower_tip,
         }
+    }
+
+    /// The branch original superarc `s` lies on (None for a zero-height
+    /// superarc collapsed into a node): a contour of `s` is shown at a
+    /// level exactly while this branch is live.
+    pub fn of_superarc(&self, sim: &Simplification, s: crate::tree::ArcId) -> Option<BranchId> {
+        let a = *sim.superarc_base.get(s.0 as usize)?;
+        let b = *self.arc_branch.get(a as usize)?;
+        (a != NONE).then_some(BranchId(b))
+    }
+
+    /// The branch arc `a` lies on.
+    pub fn of_arc(&self, a: SimplifiedArcId) -> BranchId {
+        BranchId(self.arc_branch[a.0 as usize])
+    }
+
+    /// True when branch `b` ends in a minimum below the saddle it hangs
+    /// from (false: a maximum above it; roots count as maxima).
+    pub fn goes_down(&self, b: BranchId) -> bool {
+        self.lower_tip[b.0 as usize]
     }
 
     /// Number of branches (pruned ones and roots).
@@ -165,7 +194,7 @@ impl Branches {
     }
 
     /// The root branches.
-    pub fn roots(&self) -> impl Iterator<Item = BranchId> {
+    pub fn roots(&self) -> impl DoubleEndedIterator<Item = BranchId> {
         (self.steps..self.len()).map(|b| BranchId(b as u32))
     }
 

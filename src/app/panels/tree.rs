@@ -42,7 +42,8 @@ enum Drag {
 pub struct Drawn {
     /// The panel's rect.
     pub rect: Option<Rect>,
-    /// Live arcs drawn, with the screen midpoint of each.
+    /// Live arcs drawn, with a screen point on each (the middle of its
+    /// vertical part, where a click selects it).
     pub arcs: Vec<(SimplifiedArcId, Pos2)>,
     /// Screen height of each drawn arc (parallel to `arcs`).
     pub arc_heights: Vec<f32>,
@@ -132,6 +133,10 @@ struct Frame {
     tf: Transform,
     /// Live arcs: id and screen ends (upper, lower), by id.
     segs: Vec<(SimplifiedArcId, Pos2, Pos2)>,
+    /// The polyline drawn for each (the library's layout), upper end first.
+    paths: Vec<Vec<Pos2>>,
+    /// A point on each arc's vertical part, for clicks and scripts.
+    picks: Vec<Pos2>,
     markers: Vec<Marker>,
 }
 
@@ -140,7 +145,14 @@ impl Frame {
     fn nearest(&self, p: Pos2) -> Option<SimplifiedArcId> {
         self.segs
             .iter()
-            .map(|&(id, a, b)| (segment_distance(p, a, b), id))
+            .zip(&self.paths)
+            .map(|(&(id, _, _), path)| {
+                let d = path
+                    .windows(2)
+                    .map(|w| segment_distance(p, w[0], w[1]))
+                    .fold(f32::INFINITY, f32::min);
+                (d, id)
+            })
             .filter(|(d, _)| *d <= 6.0)
             .min_by(|x, y| x.0.total_cmp(&y.0))
             .map(|(_, id)| id)
@@ -215,7 +227,8 @@ impl TreePanel {
             rect: Some(rect),
             arcs: segs
                 .iter()
-                .map(|&(id, a, b)| (id, a + (b - a) * 0.5))
+                .zip(&frame.picks)
+                .map(|(&(id, _, _), &p)| (id, p))
                 .collect(),
             arc_heights: segs.iter().map(|&(_, a, b)| (b.y - a.y).abs()).collect(),
             arc_ends: segs.iter().map(|&(_, a, b)| (a, b)).collect(),
@@ -227,7 +240,8 @@ impl TreePanel {
     /// Where everything is this frame: the transform, the live arcs' ends
     /// and the markers.
     fn frame(&self, rect: Rect, ds: &Dataset, level: &SimplifiedTree, sel: &Selection) -> Frame {
-        let plot = Rect::from_min_max(rect.min + vec2(60.0, 14.0), rect.max - vec2(14.0, 14.0));
+        // The legend has its own strip above the plot, never over the tree.
+        let plot = Rect::from_min_max(rect.min + vec2(60.0, 26.0), rect.max - vec2(14.0, 14.0));
         let (lo, hi) = ds.range;
         let tf = Transform {
             plot,
@@ -243,6 +257,34 @@ impl TreePanel {
             .map(|a| (a.id, node_pos(a.upper), node_pos(a.lower)))
             .collect();
         segs.sort_by_key(|s| s.0);
+        let column = |n: SimplifiedNodeId| {
+            let x = self.columns.get(n.0 as usize).copied().unwrap_or(0.5);
+            if x.is_finite() { x } else { 0.5 }
+        };
+        let paths: Vec<Vec<Pos2>> = segs
+            .iter()
+            .map(|&(id, _, _)| {
+                ds.layout
+                    .arc_points(level, id, column)
+                    .as_slice()
+                    .iter()
+                    .map(|p| tf.screen(p[0] as f32, p[1]))
+                    .collect()
+            })
+            .collect();
+        // The vertical part of each path: (x, upper y, lower y).
+        let vertical = |path: &[Pos2]| -> Option<(f32, f32, f32)> {
+            path.windows(2)
+                .find(|w| (w[0].x - w[1].x).abs() < 0.01 && (w[0].y - w[1].y).abs() > 0.0)
+                .map(|w| (w[0].x, w[0].y, w[1].y))
+        };
+        let picks: Vec<Pos2> = paths
+            .iter()
+            .map(|path| match vertical(path) {
+                Some((x, a, b)) => pos2(x, 0.5 * (a + b)),
+                None => path[0] + (path[path.len() - 1] - path[0]) * 0.5,
+            })
+            .collect();
         // Markers: each selected contour on the live arc holding it.
         let mut markers = Vec::new();
         for c in &sel.contours {
@@ -255,9 +297,14 @@ impl TreePanel {
                 } else {
                     0.5
                 };
+                let on_path = segs
+                    .binary_search_by_key(&a, |s| s.0)
+                    .ok()
+                    .and_then(|i| vertical(&paths[i]))
+                    .map(|(x, _, _)| pos2(x, tf.screen(0.0, c.h.clamp(vl, vu)).y));
                 markers.push(Marker {
                     id: c.id,
-                    pos: pl + (pu - pl) * t,
+                    pos: on_path.unwrap_or(pl + (pu - pl) * t),
                     colour: c.colour,
                     arc: a,
                 });
@@ -268,6 +315,8 @@ impl TreePanel {
             plot,
             tf,
             segs,
+            paths,
+            picks,
             markers,
         }
     }
@@ -431,7 +480,7 @@ impl TreePanel {
         level: &SimplifiedTree,
         sel: &Selection,
     ) {
-        for &(id, a, b) in &frame.segs {
+        for (&(id, _, _), path) in frame.segs.iter().zip(&frame.paths) {
             let (width, colour) = if let Some(m) = frame.markers.iter().find(|m| m.arc == id) {
                 (3.0, m.colour)
             } else if self.hovered == Some(id) {
@@ -439,7 +488,7 @@ impl TreePanel {
             } else {
                 (1.5, ARC_COLOUR)
             };
-            painter.line_segment([a, b], Stroke::new(width, colour));
+            painter.add(egui::Shape::line(path.clone(), Stroke::new(width, colour)));
         }
         if level.num_arcs() <= 5000 {
             for n in level.nodes() {
