@@ -347,3 +347,47 @@ fn mgh_and_mgz_read_values_spacing_and_the_ras_placement() {
         assert_close(v.field.world_position(0), [15.0, 15.5, 32.0], "vertex 0");
     }
 }
+
+#[test]
+fn vti_lz4_and_lzma_blocks_read_like_zlib() {
+    use base64::Engine as _;
+    let dir = tempfile::tempdir().unwrap();
+    let vals = reference("int16", 60);
+    let data = encode(&vals, "int16", false);
+    let b64 = base64::engine::general_purpose::STANDARD;
+    for (compressor, block) in [
+        ("vtkLZ4DataCompressor", {
+            let mut out = vec![0u8; lz4_flex::block::get_maximum_output_size(data.len())];
+            let n = lz4_flex::block::compress_into(&data, &mut out).unwrap();
+            out.truncate(n);
+            out
+        }),
+        ("vtkLZMADataCompressor", {
+            let mut out = Vec::new();
+            lzma_rs::xz_compress(&mut &data[..], &mut out).unwrap();
+            out
+        }),
+    ] {
+        // One block holding everything: nblocks, blocksize, lastblocksize, csize.
+        let header: Vec<u8> = [
+            1u32,
+            data.len() as u32,
+            data.len() as u32,
+            block.len() as u32,
+        ]
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .collect();
+        let body = b64.encode(&header) + &b64.encode(&block);
+        let vti = format!(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt32\" compressor=\"{compressor}\">\n\
+             <ImageData WholeExtent=\"0 4 0 3 0 2\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n\
+             <Piece Extent=\"0 4 0 3 0 2\"><PointData Scalars=\"v\">\n\
+             <DataArray type=\"Int16\" Name=\"v\" format=\"binary\">{body}</DataArray>\n\
+             </PointData></Piece></ImageData></VTKFile>\n"
+        );
+        let p = write(dir.path(), &format!("{compressor}.vti"), vti.as_bytes());
+        let v = read(&p).unwrap_or_else(|e| panic!("{compressor}: {e}"));
+        assert_eq!(as_f64(v.field.values()), vals, "{compressor}");
+    }
+}

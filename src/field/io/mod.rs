@@ -8,7 +8,7 @@
 //! | NRRD | [`nrrd`] | `.nrrd` (attached), `.nhdr` + data file; raw, gzip, bzip2, ascii |
 //! | MetaImage | [`metaimage`] | `.mha` (attached), `.mhd` + `.raw`/`.zraw` |
 //! | VTK legacy | [`vtk`] | `.vtk` STRUCTURED_POINTS, SCALARS or COLOR_SCALARS, binary (big-endian) or ASCII |
-//! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw or base64; zlib |
+//! | VTK XML | [`vti`] | `.vti` ImageData: ascii, base64 binary, appended raw or base64; zlib, LZ4, LZMA |
 //! | NIfTI-1, NIfTI-2 | [`nifti`] | `.nii`, `.nii.gz`, `.hdr` + `.img` |
 //! | MGH | [`mgh`] | FreeSurfer `.mgh`, `.mgz` |
 //! | raw | [`raw`] | `NAME_XxYxZ_TYPE.raw`, or any file with [`ReadOptions::raw`] |

@@ -14,8 +14,9 @@
 //!   base64 characters.
 //!
 //! With `compressor="vtkZLibDataCompressor"` the data is a block header
-//! (`nblocks, blocksize, lastblocksize, csize...`) then zlib blocks. Other
-//! compressors (LZ4, LZMA) are refused.
+//! (`nblocks, blocksize, lastblocksize, csize...`) then zlib blocks; with
+//! `vtkLZ4DataCompressor` LZ4 blocks (lz4_flex), with
+//! `vtkLZMADataCompressor` xz streams (lzma-rs).
 //!
 //! The grid is placed by `Origin` and `Direction` (row-major: column a is
 //! the direction of axis a) of `ImageData`, and the extent's first index
@@ -146,6 +147,8 @@ struct Layout {
     big_endian: bool,
     header_u64: bool,
     zlib: bool,
+    /// How each compressed block is coded (when `zlib`, i.e. compressed).
+    codec: Codec,
     array_type: ScalarType,
     format: String,
     /// Inline text between `<DataArray>` and `</DataArray>` (ascii, binary).
@@ -196,7 +199,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 .copied()
                 .filter(|c| !c.is_ascii_whitespace())
                 .collect();
-            let bytes = decode_inline(path, &text, hw, layout.zlib, layout.big_endian, expected)?;
+            let bytes = decode_inline(
+                path,
+                &text,
+                hw,
+                layout.zlib.then_some(layout.codec),
+                layout.big_endian,
+                expected,
+            )?;
             let v = data::values_from_bytes(&bytes, ty, layout.big_endian, n).map_err(err)?;
             (v, Vec::new(), "base64")
         }
@@ -214,7 +224,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             let end = text.iter().position(|&c| c == b'<').unwrap_or(text.len());
             text.truncate(end);
             text.retain(|c| !c.is_ascii_whitespace());
-            let bytes = decode_inline(path, &text, hw, layout.zlib, layout.big_endian, expected)?;
+            let bytes = decode_inline(
+                path,
+                &text,
+                hw,
+                layout.zlib.then_some(layout.codec),
+                layout.big_endian,
+                expected,
+            )?;
             let v = data::values_from_bytes(&bytes, ty, layout.big_endian, n).map_err(err)?;
             (v, Vec::new(), "appended base64")
         }
@@ -226,8 +243,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 let bytes = read_zlib_blocks(
                     path,
                     &mut f,
-                    hw,
-                    layout.big_endian,
+                    (hw, layout.big_endian, layout.codec),
                     expected,
                     file_len.saturating_sub(at),
                 )?;
@@ -269,7 +285,11 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     };
     let format = format!(
         "VTK XML ImageData ({how}{})",
-        if layout.zlib { ", zlib" } else { "" }
+        if layout.zlib {
+            format!(", {}", layout.codec.name())
+        } else {
+            String::new()
+        }
     );
     let mut warnings = warnings;
     let geometry = geometry_or_warn(layout.origin, layout.axes, Space::Unnamed, &mut warnings);
@@ -468,14 +488,17 @@ fn finish_scan(
         "UInt64" => true,
         o => return Err(invalid(path, format!("unknown header_type '{}'", clip(o)))),
     };
-    let zlib = match root.attr("compressor") {
-        None | Some("") => false,
-        Some("vtkZLibDataCompressor") => true,
+    let (zlib, codec) = match root.attr("compressor") {
+        None | Some("") => (false, Codec::Zlib),
+        Some("vtkZLibDataCompressor") => (true, Codec::Zlib),
+        Some("vtkLZ4DataCompressor") => (true, Codec::Lz4),
+        Some("vtkLZMADataCompressor") => (true, Codec::Lzma),
         Some(o) => {
             return Err(invalid(
                 path,
                 format!(
-                    "compressor '{}' is not supported (only vtkZLibDataCompressor)",
+                    "compressor '{}' is not supported (vtkZLibDataCompressor, \
+                     vtkLZ4DataCompressor, vtkLZMADataCompressor)",
                     clip(o)
                 ),
             ));
@@ -532,6 +555,7 @@ fn finish_scan(
         big_endian,
         header_u64,
         zlib,
+        codec,
         array_type,
         format: array.attr("format").unwrap_or("ascii").to_owned(),
         inline,
@@ -608,10 +632,11 @@ fn decode_inline(
     path: &Path,
     text: &[u8],
     hw: usize,
-    zlib: bool,
+    codec: Option<Codec>,
     be: bool,
     expected: u64,
 ) -> Result<Vec<u8>, ReadError> {
+    let zlib = codec.is_some();
     let enc_len = |bytes: usize| bytes.div_ceil(3) * 4;
     // The header: one word, or (compressed) three words then the block sizes.
     let first = if zlib { 3 * hw } else { hw };
@@ -654,15 +679,15 @@ fn decode_inline(
     if header.len() < header_len {
         return Err(invalid(path, "base64 data truncated in the header"));
     }
-    if zlib {
+    if let Some(codec) = codec {
         let mut r = &header[..];
         let mut body_r = &body[..];
         decode_blocks(
             path,
-            &mut r,
-            &mut body_r,
+            (&mut r, &mut body_r),
             hw,
             be,
+            codec,
             expected,
             body.len() as u64,
         )
@@ -682,8 +707,7 @@ fn decode_inline(
 fn read_zlib_blocks(
     path: &Path,
     f: &mut std::fs::File,
-    hw: usize,
-    be: bool,
+    (hw, be, codec): (usize, bool, Codec),
     expected: u64,
     available: u64,
 ) -> Result<Vec<u8>, ReadError> {
@@ -704,20 +728,79 @@ fn read_zlib_blocks(
         header.extend_from_slice(&read_word(path, &mut reader, hw, be)?.to_le_bytes()[..hw]);
     }
     let mut h = &header[..];
-    decode_blocks(path, &mut h, &mut reader, hw, false, expected, available)
+    decode_blocks(
+        path,
+        (&mut h, &mut reader),
+        hw,
+        false,
+        codec,
+        expected,
+        available,
+    )
 }
 
 fn word_le(b: &[u8]) -> u64 {
     word(b, false)
 }
 
-/// Decodes zlib blocks described by a block header read from `header`.
+/// How VTK codes each compressed block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Codec {
+    /// `vtkZLibDataCompressor`: a zlib stream.
+    Zlib,
+    /// `vtkLZ4DataCompressor`: an LZ4 block (no frame).
+    Lz4,
+    /// `vtkLZMADataCompressor`: an xz stream.
+    Lzma,
+}
+
+impl Codec {
+    fn name(self) -> &'static str {
+        match self {
+            Codec::Zlib => "zlib",
+            Codec::Lz4 => "LZ4",
+            Codec::Lzma => "LZMA",
+        }
+    }
+
+    /// Decompresses `comp` into exactly `out`; the error says what went
+    /// wrong.
+    fn decode(self, comp: &[u8], out: &mut [u8]) -> Result<(), String> {
+        let got = match self {
+            Codec::Zlib => {
+                let mut dec = flate2::read::ZlibDecoder::new(comp);
+                data::read_full(&mut dec, out).map_err(|e| e.to_string())?
+            }
+            Codec::Lz4 => lz4_flex::block::decompress_into(comp, out).map_err(|e| e.to_string())?,
+            Codec::Lzma => {
+                let mut v = Vec::with_capacity(out.len());
+                lzma_rs::xz_decompress(&mut std::io::BufReader::new(comp), &mut v)
+                    .map_err(|e| e.to_string())?;
+                if v.len() > out.len() {
+                    return Err(format!("decompresses to more than {} bytes", out.len()));
+                }
+                out[..v.len()].copy_from_slice(&v);
+                v.len()
+            }
+        };
+        if got < out.len() {
+            return Err(format!(
+                "decompresses to {got} bytes, expected {}",
+                out.len()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Decodes compressed blocks described by a block header read from
+/// `header`, their bytes from `body`.
 fn decode_blocks(
     path: &Path,
-    header: &mut &[u8],
-    body: &mut impl Read,
+    (header, body): (&mut &[u8], &mut impl Read),
     hw: usize,
     be: bool,
+    codec: Codec,
     expected: u64,
     available: u64,
 ) -> Result<Vec<u8>, ReadError> {
@@ -776,15 +859,12 @@ fn decode_blocks(
                 format!("compressed block {i} truncated: {got} of {s} bytes"),
             ));
         }
-        let mut dec = flate2::read::ZlibDecoder::new(&comp[..]);
-        let got = data::read_full(&mut dec, &mut out[at..at + want])
-            .map_err(|e| invalid(path, format!("corrupt zlib data in block {i}: {e}")))?;
-        if got < want {
-            return Err(invalid(
+        codec.decode(&comp, &mut out[at..at + want]).map_err(|e| {
+            invalid(
                 path,
-                format!("zlib block {i} decompresses to {got} bytes, expected {want}"),
-            ));
-        }
+                format!("corrupt {} data in block {i}: {e}", codec.name()),
+            )
+        })?;
         at += want;
     }
     Ok(out)
