@@ -10,6 +10,8 @@ use flexiso::app::FlexisoApp;
 use flexiso::app::selection::ContourState;
 use flexiso::session::Session;
 
+mod common;
+
 /// The explorer on `synthetic:24` (a volume a session can name), in a
 /// 1200×800 window.
 fn explorer() -> Harness<'static, FlexisoApp> {
@@ -230,4 +232,39 @@ fn without_a_system_dialog_a_typed_path_saves_the_session() {
             .is_err()
     );
     assert!(h.state().error().is_some_and(|e| e.contains("cannot save")));
+}
+
+#[test]
+fn render_session_draws_each_visible_contour_in_its_colour() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let mut h = explorer();
+    compose(&mut h);
+    let path = tmp("render.json");
+    h.state_mut().save_session(&path).expect("saved");
+    let mut s = Session::read(&path).expect("a session");
+    // Both shown, in two colours far from the grey background.
+    s.contours[0].color = "#ff0000".into();
+    s.contours[1].color = "#00ff00".into();
+    s.contours[1].visible = true;
+    s.camera = None;
+    s.write(&path).expect("written");
+    let png = tmp("render.png");
+    let out = common::flexiso(&[
+        "render",
+        "--session",
+        path.to_str().expect("utf-8"),
+        "--out",
+        png.to_str().expect("utf-8"),
+        "--size",
+        "320x240",
+    ]);
+    assert!(out.success(), "{}", out.stderr);
+    let img = image::open(&png).expect("png").to_rgba8();
+    let count = |keep: fn(&[u8]) -> bool| img.pixels().filter(|p| keep(&p.0)).count();
+    let red = count(|p| p[0] > 60 && p[1] < p[0] / 2 && p[2] < p[0] / 2);
+    let green = count(|p| p[1] > 60 && p[0] < p[1] / 2 && p[2] < p[1] / 2);
+    assert!(red > 10, "the red contour is drawn: {red} pixels");
+    assert!(green > 10, "the green contour is drawn: {green} pixels");
 }
