@@ -16,6 +16,7 @@
 //! "Unsaved changes" is a comparison too: the scene differs from the one
 //! last saved (or opened), and has contours worth keeping.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::ids::ContourId;
@@ -228,6 +229,88 @@ impl History {
     }
 }
 
+// The app's side: what the scene is now, and putting one back.
+impl super::FlexisoApp {
+    /// The scene as the user sees it now (None before a dataset).
+    pub(super) fn scene_now(&self) -> Option<Scene> {
+        let level = self.level.as_ref()?;
+        self.dataset.as_ref()?;
+        Some(Scene {
+            contours: self.selection.states(),
+            isolated: self.selection.isolated,
+            measure: self.measure,
+            step: level.step(),
+            arcs: level.num_arcs(),
+        })
+    }
+
+    /// Shows `scene` (undo, redo, Escape mid-drag, sessions): the
+    /// contours at once (extracted in the background), the level at once,
+    /// another measure once its simplification is recomputed.
+    pub(super) fn apply_scene(&mut self, scene: &Scene) {
+        let Some(ds) = &self.dataset else { return };
+        let (field, tree) = (Arc::clone(&ds.field), Arc::clone(&ds.tree));
+        self.selection
+            .restore(&field, &tree, &scene.contours, scene.isolated);
+        if scene.measure != self.measure {
+            self.set_measure(scene.measure);
+            // The steps of a simplification are deterministic: the same
+            // step of a recomputed one is the same level.
+            self.pending_step = Some(scene.step);
+        } else if let Some(level) = &mut self.level
+            && level.step() != scene.step
+        {
+            level.set_step(scene.step);
+        }
+    }
+
+    /// Undoes the last change to the scene.
+    pub fn undo(&mut self) {
+        if let Some(s) = self.history.undo() {
+            self.apply_scene(&s);
+        }
+    }
+
+    /// Redoes the last change undone.
+    pub fn redo(&mut self) {
+        if let Some(s) = self.history.redo() {
+            self.apply_scene(&s);
+        }
+    }
+
+    /// What undo would undo, if anything.
+    pub fn undo_label(&self) -> Option<&str> {
+        self.history.undo_label()
+    }
+
+    /// True when closing the scene would lose contours not saved.
+    pub fn unsaved_changes(&self) -> bool {
+        self.history.unsaved()
+    }
+
+    /// Escape mid-drag: the scene goes back to where the drag began and
+    /// the drag ends.
+    pub(super) fn cancel_drag(&mut self, ctx: &egui::Context) {
+        ctx.stop_dragging();
+        if let Some(s) = self.history.current().cloned()
+            && self.scene_now().as_ref() != Some(&s)
+        {
+            self.apply_scene(&s);
+        }
+    }
+
+    /// Records this frame's scene (see the module doc); `busy` while a
+    /// button is held or text typed.
+    pub(super) fn track_history(&mut self, busy: bool) {
+        if self.pipeline.is_running() || self.pending_step.is_some() {
+            return;
+        }
+        if let Some(s) = self.scene_now() {
+            self.history.observe(s, busy, Instant::now());
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -313,87 +396,3 @@ mod tests {
         assert!(!h.unsaved(), "back to the saved scene");
     }
 }
-
-// The app's side: what the scene is now, and putting one back.
-impl super::FlexisoApp {
-    /// The scene as the user sees it now (None before a dataset).
-    pub(super) fn scene_now(&self) -> Option<Scene> {
-        let level = self.level.as_ref()?;
-        self.dataset.as_ref()?;
-        Some(Scene {
-            contours: self.selection.states(),
-            isolated: self.selection.isolated,
-            measure: self.measure,
-            step: level.step(),
-            arcs: level.num_arcs(),
-        })
-    }
-
-    /// Shows `scene` (undo, redo, Escape mid-drag, sessions): the
-    /// contours at once (extracted in the background), the level at once,
-    /// another measure once its simplification is recomputed.
-    pub(super) fn apply_scene(&mut self, scene: &Scene) {
-        let Some(ds) = &self.dataset else { return };
-        let (field, tree) = (Arc::clone(&ds.field), Arc::clone(&ds.tree));
-        self.selection
-            .restore(&field, &tree, &scene.contours, scene.isolated);
-        if scene.measure != self.measure {
-            self.set_measure(scene.measure);
-            // The steps of a simplification are deterministic: the same
-            // step of a recomputed one is the same level.
-            self.pending_step = Some(scene.step);
-        } else if let Some(level) = &mut self.level
-            && level.step() != scene.step
-        {
-            level.set_step(scene.step);
-        }
-    }
-
-    /// Undoes the last change to the scene.
-    pub fn undo(&mut self) {
-        if let Some(s) = self.history.undo() {
-            self.apply_scene(&s);
-        }
-    }
-
-    /// Redoes the last change undone.
-    pub fn redo(&mut self) {
-        if let Some(s) = self.history.redo() {
-            self.apply_scene(&s);
-        }
-    }
-
-    /// What undo would undo, if anything.
-    pub fn undo_label(&self) -> Option<&str> {
-        self.history.undo_label()
-    }
-
-    /// True when closing the scene would lose contours not saved.
-    pub fn unsaved_changes(&self) -> bool {
-        self.history.unsaved()
-    }
-
-    /// Escape mid-drag: the scene goes back to where the drag began and
-    /// the drag ends.
-    pub(super) fn cancel_drag(&mut self, ctx: &egui::Context) {
-        ctx.stop_dragging();
-        if let Some(s) = self.history.current().cloned()
-            && self.scene_now().as_ref() != Some(&s)
-        {
-            self.apply_scene(&s);
-        }
-    }
-
-    /// Records this frame's scene (see the module doc); `busy` while a
-    /// button is held or text typed.
-    pub(super) fn track_history(&mut self, busy: bool) {
-        if self.pipeline.is_running() || self.pending_step.is_some() {
-            return;
-        }
-        if let Some(s) = self.scene_now() {
-            self.history.observe(s, busy, Instant::now());
-        }
-    }
-}
-
-use std::sync::Arc;
