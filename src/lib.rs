@@ -24,5 +24,6 @@ pub mod measure;
 pub mod mesh;
 pub mod progress;
 pub mod render;
+pub mod session;
 pub mod simplify;
 pub mod tree;

@@ -110,8 +110,12 @@ fn clicking_an_arc_selects_its_contour_and_a_mesh_appears_in_the_scene() {
         assert!(app.view3d().renders > 0, "the 3D view rendered");
     }
 
-    // Escape clears the selection, and the mesh leaves the scene.
-    h.key_press(egui::Key::Escape);
+    // Edit > Clear contours clears the selection (Escape no longer does:
+    // it only closes popups and cancels drags), and the mesh leaves the
+    // scene.
+    h.get_by_label("Edit").click();
+    h.run_steps(2);
+    h.get_by_label("Clear contours").click();
     h.run_steps(3);
     assert!(h.state().selection().contours.is_empty());
     if gpu {

@@ -8,6 +8,9 @@
 //! * [`panels`]: the tree, the curve, the 3D view, the contour list, the
 //!   menu and status bars, one per file.
 //! * [`selection`]: the shared state the panels talk through.
+//! * [`history`]: undo and redo of the scene, one step per gesture.
+//! * [`session`]: File > Save/Open session, the unsaved-changes question,
+//!   the recovery file.
 //! * [`exports`], [`instrument`], [`format`]: File > Export, the frame log
 //!   and position dump for scripts, how numbers are written.
 //!
@@ -20,11 +23,13 @@
 pub mod dataset;
 pub mod exports;
 pub mod format;
+pub mod history;
 pub mod ids;
 pub mod instrument;
 pub mod jobs;
 pub mod panels;
 pub mod selection;
+pub mod session;
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -40,9 +45,10 @@ use crate::progress::Progress;
 use crate::simplify::{Measure, SimplifiedTree};
 
 use dataset::{DEFAULT_ARCS, Dataset};
+use history::History;
 use instrument::{FrameLog, UiDump};
 use jobs::betti::BettiJob;
-use jobs::dialog::{DialogJob, DialogKind};
+use jobs::dialog::{DialogAnswer, DialogJob, DialogKind};
 use jobs::export::Exports;
 use jobs::isosurface::AllContours;
 use jobs::{Job, JobError, Notify};
@@ -58,6 +64,9 @@ pub use panels::menu::CONTROLS;
 
 /// How often the window redraws on its own while a job runs.
 const PROGRESS_REPAINT: Duration = Duration::from_millis(200);
+
+/// Width of the contour list (points).
+const CONTOUR_PANEL_WIDTH: f32 = 270.0;
 
 /// The explorer.
 pub struct FlexisoApp {
@@ -91,6 +100,26 @@ pub struct FlexisoApp {
     notify: Option<Notify>,
     /// The window's context (None in tests built without one).
     ctx: Option<egui::Context>,
+    /// Undo and redo of the scene.
+    history: History,
+    /// What waits for the answer about unsaved changes.
+    confirm: Option<session::Pending>,
+    /// What to do once the session is saved (the question's "Save").
+    after_save: Option<session::Pending>,
+    /// The user chose to close the window.
+    closing: bool,
+    /// Where the session was last saved or opened.
+    session_path: Option<PathBuf>,
+    /// A session to show once its volume is open.
+    pending_session: Option<crate::session::Session>,
+    /// The level to show once the measure's simplification arrives.
+    pending_step: Option<usize>,
+    /// The recovery file, when written.
+    recovery: Option<session::Recovery>,
+    /// A crashed run's scene, offered.
+    recovery_offer: Option<crate::session::Session>,
+    /// The session being shown was recovered (saved nowhere).
+    recovered: bool,
 }
 
 impl FlexisoApp {
@@ -122,6 +151,16 @@ impl FlexisoApp {
             sized_frames: 0,
             notify,
             ctx: None,
+            history: History::default(),
+            confirm: None,
+            after_save: None,
+            closing: false,
+            session_path: None,
+            pending_session: None,
+            pending_step: None,
+            recovery: None,
+            recovery_offer: None,
+            recovered: false,
         }
     }
 
@@ -138,6 +177,9 @@ impl FlexisoApp {
         app.ctx = Some(cc.egui_ctx.clone());
         app.selection.extract_in_background(Some(notify));
         app.start(request);
+        if let Some(p) = session::Recovery::default_path() {
+            app.set_recovery_file(p);
+        }
         app
     }
 
@@ -248,6 +290,17 @@ impl FlexisoApp {
         &self.selection
     }
 
+    /// The selection, to edit as the contour list does (tests: the
+    /// colour picker is hard to drive).
+    pub fn selection_mut(&mut self) -> &mut Selection {
+        &mut self.selection
+    }
+
+    /// The 3D view's camera, to move (tests, scripts).
+    pub fn camera_mut(&mut self) -> &mut crate::render::Camera {
+        &mut self.view3d.camera
+    }
+
     /// The tree panel (what it drew last frame).
     pub fn tree_panel(&self) -> &TreePanel {
         &self.tree_panel
@@ -291,6 +344,8 @@ impl FlexisoApp {
             Err(JobError::Cancelled) => return,
             Err(e) => {
                 self.error = Some(e.to_string());
+                self.pending_session = None;
+                self.pending_step = None;
                 return;
             }
         };
@@ -339,6 +394,18 @@ impl FlexisoApp {
         self.level = Some(level);
         self.dataset = Some(ds);
         self.error = None;
+        if !same_field {
+            // Another volume: the old steps do not apply to it.
+            self.history = History::default();
+            if self.pending_session.is_none() {
+                self.session_path = None;
+            }
+        } else if let (Some(step), Some(level)) = (self.pending_step.take(), &mut self.level) {
+            level.set_step(step);
+        }
+        if let Some(s) = self.pending_session.take() {
+            self.apply_session(&s);
+        }
     }
 
     /// The Betti numbers of the dataset shown, once computed.
@@ -378,23 +445,41 @@ impl FlexisoApp {
     }
 
     fn handle_dialogs(&mut self) {
-        let Some(Ok(Some((kind, p)))) = self.dialog.poll_take() else {
-            return;
-        };
+        match self.dialog.poll_take() {
+            Some(Ok(DialogAnswer::Chosen((kind, p)))) => self.chosen(kind, p),
+            Some(Ok(DialogAnswer::Unavailable(kind))) => self.menu.ask_path(kind),
+            Some(Ok(DialogAnswer::Cancelled)) => self.after_save = None,
+            Some(Err(e)) => self.error = Some(format!("file dialog: {e}")),
+            None => {}
+        }
+    }
+
+    /// A path chosen in a dialog or typed for one.
+    fn chosen(&mut self, kind: DialogKind, p: PathBuf) {
         match kind {
-            DialogKind::Open => self.open(&p.to_string_lossy()),
+            DialogKind::Open => self.request(session::Pending::Open(p.to_string_lossy().into())),
             DialogKind::ExportContours => self.start_contour_export(p),
             DialogKind::TreeJson => self.start_tree_export(p),
             DialogKind::Screenshot => self.pending_screenshot = Some(p),
+            DialogKind::SaveSession => {
+                let _ = self.save_session(&p);
+            }
+            DialogKind::OpenSession => self.request(session::Pending::OpenSession(p)),
         }
     }
 
     fn act(&mut self, action: Action) {
         match action {
             Action::Dialog(kind) => self.spawn_dialog(kind),
-            Action::Open(input) => self.open(&input),
+            Action::Open(input) => self.request(session::Pending::Open(input)),
             Action::SetMeasure(m) => self.set_measure(m),
             Action::CancelJob => self.pipeline.cancel(),
+            Action::Path(kind, p) => self.chosen(kind, PathBuf::from(p)),
+            Action::Undo => self.undo(),
+            Action::Redo => self.redo(),
+            Action::ClearContours => self.selection.clear(),
+            Action::SaveSession => self.save_session_here_or_ask(),
+            Action::Quit => self.request(session::Pending::Quit),
         }
     }
 
@@ -402,7 +487,22 @@ impl FlexisoApp {
         if ui.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::O)) {
             self.spawn_dialog(DialogKind::Open);
         }
+        if ui.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::S)) {
+            self.save_session_here_or_ask();
+        }
         let typing = ui.ctx().egui_wants_keyboard_input();
+        if !typing && self.confirm.is_none() {
+            // Shift+Z first: consume_key(COMMAND, Z) ignores shift.
+            let redo = ui.input_mut(|i| {
+                i.consume_key(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z)
+                    || i.consume_key(Modifiers::COMMAND, Key::Y)
+            });
+            if redo {
+                self.redo();
+            } else if ui.input_mut(|i| i.consume_key(Modifiers::COMMAND, Key::Z)) {
+                self.undo();
+            }
+        }
         if !typing {
             if ui.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Delete)) {
                 if let Some(id) = self.selection.active {
@@ -411,8 +511,10 @@ impl FlexisoApp {
                     self.selection.remove(last);
                 }
             }
-            if ui.input_mut(|i| i.consume_key(Modifiers::NONE, Key::Escape)) {
-                self.selection.clear();
+            // Escape closes popups (egui does) and cancels a drag; it
+            // never clears the scene (Edit > Clear contours does).
+            if ui.input(|i| i.key_pressed(Key::Escape) && i.pointer.any_down()) {
+                self.cancel_drag(&ui.ctx().clone());
             }
         }
         let dropped: Vec<PathBuf> = ui.input(|i| {
@@ -424,7 +526,7 @@ impl FlexisoApp {
                 .collect()
         });
         if let Some(p) = dropped.first() {
-            self.open(&p.to_string_lossy());
+            self.request(session::Pending::Open(p.to_string_lossy().into()));
         }
     }
 
@@ -538,6 +640,11 @@ impl FlexisoApp {
 
     /// The menu bar, with the error or info line below it.
     fn top_panel(&mut self, ui: &mut egui::Ui) {
+        self.menu.edit = panels::menu::EditState {
+            undo: self.history.undo_label().map(str::to_string),
+            redo: self.history.redo_label().map(str::to_string),
+            contours: self.selection.contours.len(),
+        };
         let actions = self.menu.ui(
             ui,
             self.measure,
@@ -607,6 +714,7 @@ impl FlexisoApp {
 impl eframe::App for FlexisoApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let t0 = Instant::now();
+        self.intercept_close(&ui.ctx().clone());
         if let Some(r) = self.pipeline.poll_take() {
             self.accept(r);
         }
@@ -632,9 +740,11 @@ impl eframe::App for FlexisoApp {
             }
         }
         tree.show(ui, |ui| self.tree_and_curve(ui));
+        // A fixed width: the 3D view does not move as the list's text
+        // changes.
         egui::Panel::right("selection")
-            .resizable(true)
-            .default_size(250.0)
+            .resizable(false)
+            .exact_size(CONTOUR_PANEL_WIDTH)
             .show(ui, |ui| {
                 let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
                 panels::contour_list::ui(ui, &mut self.selection, tree.as_deref());
@@ -653,6 +763,11 @@ impl eframe::App for FlexisoApp {
         if let Some(a) = self.menu.path_window(&ui.ctx().clone()) {
             self.act(a);
         }
+        self.confirm_modal(&ui.ctx().clone());
+        self.recovery_modal(&ui.ctx().clone());
+        let busy = ui.input(|i| i.pointer.any_down()) || ui.ctx().egui_wants_keyboard_input();
+        self.track_history(busy);
+        self.autosave(t0);
         self.save_screenshot(rs.as_ref());
         self.write_ui_dump(view_rect);
 

@@ -44,6 +44,8 @@ pub struct Contour {
     pub colour: Color32,
     /// Drawn in the 3D view.
     pub visible: bool,
+    /// The user's name for it ("brain"); may be empty.
+    pub name: String,
     /// The extracted mesh (None until extracted, or when the superarc
     /// does not span h).
     pub mesh: Option<Arc<ContourMesh>>,
@@ -70,6 +72,26 @@ impl Contour {
     pub fn measuring(&self) -> bool {
         self.mesh.is_some() && self.topology.is_none()
     }
+}
+
+/// What the user made of one contour: plain data, no mesh (see
+/// [`Selection::states`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContourState {
+    /// Its id.
+    pub id: ContourId,
+    /// The superarc it lies on.
+    pub superarc: ArcId,
+    /// Its isovalue.
+    pub h: f64,
+    /// Its group (see [`Contour::group`]).
+    pub group: ContourId,
+    /// Its colour.
+    pub colour: Color32,
+    /// Drawn.
+    pub visible: bool,
+    /// Its name.
+    pub name: String,
 }
 
 /// The selected contours and the global isovalue.
@@ -224,6 +246,7 @@ impl Selection {
             h,
             colour,
             visible: true,
+            name: String::new(),
             mesh: None,
             gpu: None,
             topology: None,
@@ -319,7 +342,8 @@ impl Selection {
         }
     }
 
-    /// Removes every contour.
+    /// Removes every contour; the next one picked is numbered 0 again
+    /// (its extraction jobs are gone with the old ones).
     pub fn clear(&mut self) {
         self.contours.clear();
         if let Some(e) = &mut self.extractions {
@@ -327,6 +351,83 @@ impl Selection {
         }
         self.active = None;
         self.isolated = None;
+        self.next_id = 0;
+    }
+
+    /// What the user made of each contour, as plain data (for undo and
+    /// sessions), in the list's order.
+    pub fn states(&self) -> Vec<ContourState> {
+        self.contours
+            .iter()
+            .map(|c| ContourState {
+                id: c.id,
+                superarc: c.superarc,
+                h: c.h,
+                group: c.group,
+                colour: c.colour,
+                visible: c.visible,
+                name: c.name.clone(),
+            })
+            .collect()
+    }
+
+    /// Makes the selection `states` (undo, redo, sessions): contours with
+    /// the same id keep their mesh unless they moved; the others are
+    /// extracted; contours not in `states` are removed.
+    pub fn restore(
+        &mut self,
+        field: &Arc<ScalarField>,
+        tree: &Arc<ContourTree>,
+        states: &[ContourState],
+        isolated: Option<ContourId>,
+    ) {
+        let gone: Vec<ContourId> = self
+            .contours
+            .iter()
+            .map(|c| c.id)
+            .filter(|id| states.iter().all(|s| s.id != *id))
+            .collect();
+        for id in gone {
+            self.remove(id);
+        }
+        let mut old = std::mem::take(&mut self.contours);
+        for s in states {
+            let mut c = match old.iter().position(|c| c.id == s.id) {
+                Some(i) => old.swap_remove(i),
+                None => Contour {
+                    id: s.id,
+                    group: s.group,
+                    superarc: s.superarc,
+                    h: s.h,
+                    colour: s.colour,
+                    visible: s.visible,
+                    name: String::new(),
+                    mesh: None,
+                    gpu: None,
+                    topology: None,
+                    version: 0,
+                    extract_ms: 0.0,
+                    requested: 0,
+                    done: 0,
+                },
+            };
+            let moved = c.requested == 0 || c.superarc != s.superarc || c.h != s.h;
+            c.superarc = s.superarc;
+            c.h = s.h;
+            c.group = s.group;
+            c.colour = s.colour;
+            c.visible = s.visible;
+            c.name = s.name.clone();
+            if moved {
+                self.request(field, tree, &mut c);
+            }
+            self.contours.push(c);
+            self.next_id = self.next_id.max(s.id.0 + 1);
+        }
+        self.isolated = isolated.filter(|i| self.get(*i).is_some());
+        if self.active.is_some_and(|a| self.get(a).is_none()) {
+            self.active = None;
+        }
     }
 
     /// True when contour `c` is drawn (visible, and not hidden by an

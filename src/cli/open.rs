@@ -20,6 +20,10 @@ pub struct Args {
     /// whenever they change (for scripted clicks, see scripts/screenshot.sh).
     #[arg(long, value_name = "FILE", hide = true)]
     pub ui_dump: Option<PathBuf>,
+    /// Open this session (its volume and scene; see the README's
+    /// Sessions) instead of INPUT.
+    #[arg(long, value_name = "JSON")]
+    pub session: Option<PathBuf>,
     /// Initial window size.
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(f32, f32)>,
@@ -39,7 +43,18 @@ fn parse_size(s: &str) -> Result<(f32, f32), String> {
 /// Runs `flexiso open`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Options that do not need the file are checked before any window.
-    let source = args.input.source()?;
+    let mut source = args.input.source()?;
+    let session = match &args.session {
+        Some(p) => {
+            let s = crate::session::Session::read(p)?;
+            source = crate::field::source::VolumeSource::parse(
+                &s.volume_input(p),
+                crate::field::io::ReadOptions::default(),
+            )?;
+            Some(p.clone())
+        }
+        None => None,
+    };
     let (w, h) = args.size.unwrap_or((1400.0, 900.0));
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -67,6 +82,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
             if let Some(p) = ui_dump {
                 app.set_ui_dump(p);
+            }
+            if let Some(p) = &session {
+                app.open_session(p);
             }
             Ok(Box::new(app))
         }),

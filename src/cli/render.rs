@@ -5,7 +5,9 @@
 //! What is drawn: with `--arc UPPER:LOWER` the single contour of that
 //! superarc at `--iso` (default: the middle of the arc's value range);
 //! otherwise every contour at `--iso` (default: the middle of the value
-//! range), each in its own colour.
+//! range), each in its own colour. With `--session S.json`, the session's
+//! visible contours in their colours, from its camera: the explorer's
+//! picture of that scene.
 
 use std::path::PathBuf;
 
@@ -43,6 +45,10 @@ pub struct Args {
     /// Camera elevation, degrees.
     #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
     pub pitch: f32,
+    /// Draw this session's scene (its volume replaces INPUT; --iso and
+    /// --arc do not apply; its camera replaces --yaw and --pitch).
+    #[arg(long, value_name = "JSON", conflicts_with_all = ["iso", "arc"])]
+    pub session: Option<PathBuf>,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -69,7 +75,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     super::check_output(&args.out)?;
     // The report goes to standard error: the picture is the product.
     let r = super::Report::new(true);
-    let volume = args.input.load()?;
+    let session = match &args.session {
+        Some(p) => Some((crate::session::Session::read(p)?, p.clone())),
+        None => None,
+    };
+    let volume = match &session {
+        Some((s, p)) => crate::field::source::VolumeSource::parse(
+            &s.volume_input(p),
+            crate::field::io::ReadOptions::default(),
+        )?
+        .load()?,
+        None => args.input.load()?,
+    };
     let field = &volume.field;
     for w in &volume.warnings {
         r.warn(w);
@@ -78,29 +95,60 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
 
     let (lo, hi) = field.range();
-    let surfaces = match args.arc {
-        Some(ends) => {
-            let targets = Arcs::Superarcs.targets(&tree, field)?;
-            let target = Arcs::Superarcs.find(&targets, ends)?;
-            let (upper, lower) = ends;
-            let (top, bottom) = (field.value(upper), field.value(lower));
-            let h = args.iso.unwrap_or(0.5 * (top + bottom));
-            if !(bottom..=top).contains(&h) {
-                bail!(
-                    "--iso {h} is outside the arc's range [{bottom}, {top}]: its contour \
-                     exists only for values in that range"
-                );
-            }
-            crate::report!(r, "arc {upper}:{lower} at h = {h}");
-            arc_contour(field, &tree, target, h)?
+    let mut colours = Vec::new();
+    let surfaces = if let Some((s, _)) = &session {
+        let placed = s.place(&tree, field);
+        for p in &placed.problems {
+            r.warn(p);
         }
-        None => {
-            let h = args.iso.unwrap_or(0.5 * (lo + hi));
-            if !(lo..=hi).contains(&h) {
-                bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
+        let mut surfaces = Vec::new();
+        for (i, c) in placed
+            .contours
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.visible)
+        {
+            let iso = Isovalue::new(c.isovalue);
+            let Some(seed) = contour::path_seed_in_chain(&tree, field, &[c.superarc], iso) else {
+                continue;
+            };
+            surfaces.push(surface(
+                contour::ContourFollower::new(field).follow(&seed, iso),
+            ));
+            colours.push(match c.colour {
+                Some(rgb) => rgb.map(|v| f32::from(v) / 255.0),
+                None => {
+                    let [r, g, b, _] = crate::render::palette_rgba(i);
+                    [r, g, b]
+                }
+            });
+        }
+        surfaces
+    } else {
+        match args.arc {
+            Some(ends) => {
+                let targets = Arcs::Superarcs.targets(&tree, field)?;
+                let target = Arcs::Superarcs.find(&targets, ends)?;
+                let (upper, lower) = ends;
+                let (top, bottom) = (field.value(upper), field.value(lower));
+                let h = args.iso.unwrap_or(0.5 * (top + bottom));
+                if !(bottom..=top).contains(&h) {
+                    bail!(
+                        "--iso {h} is outside the arc's range [{bottom}, {top}]: its contour \
+                     exists only for values in that range"
+                    );
+                }
+                crate::report!(r, "arc {upper}:{lower} at h = {h}");
+                arc_contour(field, &tree, target, h)?
             }
-            crate::report!(r, "all contours at h = {h}");
-            all_contours(field, &tree, h)?
+            None => {
+                let h = args.iso.unwrap_or(0.5 * (lo + hi));
+                if !(lo..=hi).contains(&h) {
+                    bail!("--iso {h} is outside the volume's range [{lo}, {hi}]");
+                }
+                crate::report!(r, "all contours at h = {h}");
+                all_contours(field, &tree, h)?
+            }
         }
     };
     let triangles: usize = surfaces.iter().map(|s| s.indices.len() / 3).sum();
@@ -114,7 +162,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             positions: &s.positions,
             normals: &s.normals,
             indices: &s.indices,
-            colour: crate::render::palette_rgba(i),
+            colour: match colours.get(i) {
+                Some(&[r, g, b]) => [r, g, b, 1.0],
+                None => crate::render::palette_rgba(i),
+            },
         })
         .collect();
     let mut camera = Camera {
@@ -123,6 +174,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..Camera::default()
     };
     camera.fit(bounds.0, bounds.1);
+    if let Some(c) = session.as_ref().and_then(|(s, _)| s.camera) {
+        // Fitted first for the scene's radius (near and far planes), as
+        // the explorer's camera is.
+        camera.target = c.target.into();
+        camera.distance = c.distance.max(1e-6);
+        camera.yaw = c.yaw;
+        camera.pitch = c.pitch;
+        camera.fov_y = c.fov_y;
+    }
     let img = crate::render::render_to_image(&meshes, Some(bounds), Some(&camera), width, height)
         .context("rendering failed")?;
     if super::is_stdio(&args.out) {

@@ -17,18 +17,56 @@ pub enum DialogKind {
     Screenshot,
     /// Where to export the tree as JSON.
     TreeJson,
+    /// Where to save the session.
+    SaveSession,
+    /// A session to open.
+    OpenSession,
+}
+
+impl DialogKind {
+    /// What the typed-path window asks for this kind.
+    pub fn title(self) -> &'static str {
+        match self {
+            DialogKind::Open => "Open a volume",
+            DialogKind::ExportContours => "Export contours (.ply, .obj or .stl)",
+            DialogKind::Screenshot => "Save the 3D view (.png)",
+            DialogKind::TreeJson => "Export the contour tree (.json)",
+            DialogKind::SaveSession => "Save the session (.json)",
+            DialogKind::OpenSession => "Open a session (.json)",
+        }
+    }
 }
 
 /// A dialog's answer: what it asked and the path chosen.
 pub type Answer = (DialogKind, PathBuf);
 
-/// The dialog job: `Ready(None)` when the user cancelled the dialog.
-pub type DialogJob = Job<Option<Answer>>;
+/// What a dialog came back with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DialogAnswer {
+    /// A path was chosen.
+    Chosen(Answer),
+    /// The user cancelled.
+    Cancelled,
+    /// No system dialog could show (no portal, no zenity; or
+    /// `FLEXISO_NO_DIALOG` set): ask for a typed path instead.
+    Unavailable(DialogKind),
+}
+
+/// The dialog job.
+pub type DialogJob = Job<DialogAnswer>;
+
+/// A dialog that answers "cancelled" quicker than this never showed:
+/// no person closes a file dialog in a quarter of a second.
+const TOO_QUICK: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// Opens a dialog for `kind` in `start_dir`, proposing file names made
 /// from `stem` (the dataset's name).
 pub fn spawn(job: &mut DialogJob, kind: DialogKind, start_dir: Option<PathBuf>, stem: String) {
     job.start("dialog", move |_| {
+        if std::env::var_os("FLEXISO_NO_DIALOG").is_some() {
+            return Ok(DialogAnswer::Unavailable(kind));
+        }
+        let t0 = std::time::Instant::now();
         // rfd's portal backend is thread-safe; the UI keeps running.
         let mut d = rfd::FileDialog::new();
         if let Some(dir) = start_dir {
@@ -51,7 +89,20 @@ pub fn spawn(job: &mut DialogJob, kind: DialogKind, start_dir: Option<PathBuf>, 
                 .add_filter("JSON", &["json"])
                 .set_file_name(format!("{stem}_tree.json"))
                 .save_file(),
+            DialogKind::SaveSession => d
+                .set_title("Save the session")
+                .add_filter("flexiso session", &["json"])
+                .set_file_name(format!("{stem}_session.json"))
+                .save_file(),
+            DialogKind::OpenSession => d
+                .set_title("Open a session")
+                .add_filter("flexiso session", &["json"])
+                .pick_file(),
         };
-        Ok(path.map(|p| (kind, p)))
+        Ok(match path {
+            Some(p) => DialogAnswer::Chosen((kind, p)),
+            None if t0.elapsed() < TOO_QUICK => DialogAnswer::Unavailable(kind),
+            None => DialogAnswer::Cancelled,
+        })
     });
 }

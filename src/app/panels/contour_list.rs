@@ -1,5 +1,5 @@
-//! The list of selected contours: colour, visibility, isolation, removal,
-//! and each contour's measurements (triangles, area, volume, genus) as
+//! The list of selected contours: colour, name, visibility, isolation,
+//! removal, and each contour's measurements (triangles, area, volume, genus) as
 //! they arrive from the extraction jobs.
 
 use egui::{Color32, RichText};
@@ -18,14 +18,20 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
         return;
     }
     ui.horizontal(|ui| {
-        if ui.button("Clear (Esc)").clicked() {
+        if ui
+            .button("Clear")
+            .on_hover_text("Edit > Clear contours")
+            .clicked()
+        {
             selection.clear();
         }
         if selection.isolated.is_some() && ui.button("Show all").clicked() {
-            selection.isolated = None;
+            show_all(selection);
         }
     });
     let mut remove = None;
+    let mut isolate = None;
+    let mut unisolate = false;
     egui::ScrollArea::vertical().show(ui, |ui| {
         for c in &mut selection.contours {
             let active = selection.active == Some(c.id);
@@ -47,6 +53,7 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
                         });
                         if ui
                             .selectable_label(active, format!("#{}  h = {}", c.id, fmt_value(c.h)))
+                            .on_hover_text("click: make it the active contour")
                             .on_hover_text(format!(
                                 "superarc {} (vertices upper:lower)",
                                 arc.unwrap_or_default()
@@ -56,11 +63,22 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
                             selection.active = Some(c.id);
                         }
                     });
+                    ui.add(
+                        egui::TextEdit::singleline(&mut c.name)
+                            .hint_text("name")
+                            .desired_width(f32::INFINITY),
+                    );
                     ui.horizontal(|ui| {
-                        ui.checkbox(&mut c.visible, "visible");
+                        if ui.checkbox(&mut c.visible, "visible").changed()
+                            && c.visible
+                            && selection.isolated.is_some_and(|i| i != c.id)
+                        {
+                            // Another one shown: none is alone any more.
+                            unisolate = true;
+                        }
                         let iso = selection.isolated == Some(c.id);
                         if ui.selectable_label(iso, "isolate").clicked() {
-                            selection.isolated = if iso { None } else { Some(c.id) };
+                            isolate = Some((c.id, !iso));
                         }
                         if ui.button("delete").clicked() {
                             remove = Some(c.id);
@@ -78,7 +96,11 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
                                 if t.is_closed() {
                                     format!("volume {}", fmt_value(t.volume))
                                 } else {
-                                    format!("open ({} boundary loops)", t.boundary_loops)
+                                    format!(
+                                        "open ({} boundary loop{})",
+                                        t.boundary_loops,
+                                        if t.boundary_loops == 1 { "" } else { "s" }
+                                    )
                                 },
                                 t.genus(),
                                 if t.components > 1 {
@@ -123,4 +145,27 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
     if let Some(id) = remove {
         selection.remove(id);
     }
+    if unisolate {
+        selection.isolated = None;
+    }
+    match isolate {
+        // Isolating shows only this one: every other row's visible box
+        // is unticked, and ticked again when isolation ends.
+        Some((id, true)) => {
+            for c in &mut selection.contours {
+                c.visible = c.id == id;
+            }
+            selection.isolated = Some(id);
+        }
+        Some((_, false)) => show_all(selection),
+        None => {}
+    }
+}
+
+/// Ends isolation: every contour visible again.
+fn show_all(selection: &mut Selection) {
+    for c in &mut selection.contours {
+        c.visible = true;
+    }
+    selection.isolated = None;
 }

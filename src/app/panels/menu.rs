@@ -24,8 +24,10 @@ against feature size).
 3D view: drag rotates, wheel zooms, right or middle drag pans, \
 double-click fits the contours (again: the volume); click a surface to \
 pick it.
-Keys: Ctrl+O opens, Delete removes the active contour, Escape clears. \
-Drop a volume file on the window to open it.";
+Keys: Ctrl+O opens, Ctrl+S saves the session, Ctrl+Z undoes, \
+Ctrl+Shift+Z or Ctrl+Y redoes, Delete removes the active contour, Escape \
+closes a popup or cancels a drag (Edit > Clear contours clears). Drop a \
+volume file on the window to open it.";
 
 /// What the user asked for from the menu.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,15 +40,41 @@ pub enum Action {
     SetMeasure(Measure),
     /// Cancel the pipeline job.
     CancelJob,
+    /// A path typed for what a dialog would have asked.
+    Path(DialogKind, String),
+    /// Undo the last change to the scene.
+    Undo,
+    /// Redo the last change undone.
+    Redo,
+    /// Remove every contour (undoable).
+    ClearContours,
+    /// Save the session (where it was last saved, else ask where).
+    SaveSession,
+    /// Close the window (asking first when there are unsaved changes).
+    Quit,
 }
 
-/// The menu's own state: the "Open a path" window.
+/// What the Edit menu offers, set by the app each frame.
+#[derive(Clone, Debug, Default)]
+pub struct EditState {
+    /// What undo would undo.
+    pub undo: Option<String>,
+    /// What redo would redo.
+    pub redo: Option<String>,
+    /// Contours selected.
+    pub contours: usize,
+}
+
+/// The menu's own state: the typed-path window.
 #[derive(Default)]
 pub struct Menu {
-    path_window: bool,
+    /// The typed-path window, when open, and what it asks for.
+    path_window: Option<DialogKind>,
     path_input: String,
     /// Where the "all contours at h" checkbox was drawn (scripts).
     pub all_checkbox: Option<egui::Rect>,
+    /// The Edit menu's entries.
+    pub edit: EditState,
 }
 
 impl Menu {
@@ -72,7 +100,17 @@ impl Menu {
                 // Without a desktop portal or GTK the dialog cannot show:
                 // a typed path always works.
                 if ui.button("Open a path…").clicked() {
-                    self.path_window = true;
+                    self.ask_path(DialogKind::Open);
+                }
+                ui.separator();
+                if ui.button("Open session…").clicked() {
+                    actions.push(Action::Dialog(DialogKind::OpenSession));
+                }
+                if ui.button("Save session  (Ctrl+S)").clicked() {
+                    actions.push(Action::SaveSession);
+                }
+                if ui.button("Save session as…").clicked() {
+                    actions.push(Action::Dialog(DialogKind::SaveSession));
                 }
                 ui.separator();
                 if ui.button("Export contours (PLY/OBJ/STL)…").clicked() {
@@ -86,7 +124,37 @@ impl Menu {
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                    actions.push(Action::Quit);
+                }
+            });
+            ui.menu_button("Edit", |ui| {
+                let e = &self.edit;
+                let undo = match &e.undo {
+                    Some(l) => format!("Undo {l}  (Ctrl+Z)"),
+                    None => "Undo  (Ctrl+Z)".into(),
+                };
+                if ui
+                    .add_enabled(e.undo.is_some(), egui::Button::new(undo))
+                    .clicked()
+                {
+                    actions.push(Action::Undo);
+                }
+                let redo = match &e.redo {
+                    Some(l) => format!("Redo {l}  (Ctrl+Shift+Z)"),
+                    None => "Redo  (Ctrl+Shift+Z)".into(),
+                };
+                if ui
+                    .add_enabled(e.redo.is_some(), egui::Button::new(redo))
+                    .clicked()
+                {
+                    actions.push(Action::Redo);
+                }
+                ui.separator();
+                if ui
+                    .add_enabled(e.contours > 0, egui::Button::new("Clear contours"))
+                    .clicked()
+                {
+                    actions.push(Action::ClearContours);
                 }
             });
             ui.menu_button("Help", |ui| {
@@ -119,14 +187,25 @@ impl Menu {
         actions
     }
 
-    /// The "Open a path" window, when open.
+    /// Opens the typed-path window for `kind` (the menu's "Open a
+    /// path…", and every dialog when no system dialog can show).
+    pub fn ask_path(&mut self, kind: DialogKind) {
+        self.path_window = Some(kind);
+    }
+
+    /// What the typed-path window asks for, when open.
+    pub fn asking_path(&self) -> Option<DialogKind> {
+        self.path_window
+    }
+
+    /// The typed-path window, when open.
     pub fn path_window(&mut self, ctx: &egui::Context) -> Option<Action> {
-        if !self.path_window {
-            return None;
-        }
+        let kind = self.path_window?;
+        let opening = matches!(kind, DialogKind::Open | DialogKind::OpenSession);
         let mut open = true;
         let mut go = false;
-        egui::Window::new("Open a volume")
+        egui::Window::new(kind.title())
+            .id(egui::Id::unique("typed path"))
             .open(&mut open)
             .collapsible(false)
             .show(ctx, |ui| {
@@ -135,20 +214,35 @@ impl Menu {
                     let r = ui
                         .add(
                             egui::TextEdit::singleline(&mut self.path_input)
-                                .hint_text("file, folder or synthetic:N")
+                                .hint_text(if kind == DialogKind::Open {
+                                    "file, folder or synthetic:N"
+                                } else {
+                                    "file"
+                                })
                                 .desired_width(320.0),
                         )
                         .labelled_by(label.id);
                     go |= r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
                 });
-                go |= ui.button("Open path").clicked();
+                if kind != DialogKind::Open {
+                    ui.label("No system file dialog here: type the path.");
+                }
+                go |= ui
+                    .button(if opening { "Open path" } else { "Save to path" })
+                    .clicked();
             });
         let mut action = None;
         if go && !self.path_input.trim().is_empty() {
-            action = Some(Action::Open(self.path_input.trim().to_string()));
+            let p = self.path_input.trim().to_string();
+            action = Some(match kind {
+                DialogKind::Open => Action::Open(p),
+                k => Action::Path(k, p),
+            });
             open = false;
         }
-        self.path_window = open;
+        if !open {
+            self.path_window = None;
+        }
         action
     }
 }

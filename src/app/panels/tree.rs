@@ -509,6 +509,18 @@ impl TreePanel {
                 m.colour,
                 Stroke::new(if active { 2.0 } else { 1.0 }, Color32::WHITE),
             );
+            // The contour's name beside its marker.
+            if let Some(c) = sel.get(m.id)
+                && !c.name.is_empty()
+            {
+                painter.text(
+                    m.pos + vec2(10.0, 0.0),
+                    egui::Align2::LEFT_CENTER,
+                    &c.name,
+                    egui::FontId::proportional(12.0),
+                    m.colour,
+                );
+            }
         }
     }
 

@@ -1,0 +1,317 @@
+//! Nothing the user makes is lost (issue 16): undo and redo of every kind
+//! of change to the scene, Escape that only closes popups and cancels
+//! drags, and the question asked before unsaved changes are thrown away.
+//! Driven headless with egui_kittest, as a user would.
+
+use egui::{Color32, Key, Modifiers, Pos2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use flexiso::app::FlexisoApp;
+use flexiso::app::session::Pending;
+use flexiso::field::synthetic::Synthetic;
+use flexiso::simplify::{Measure, SimplifiedArcId};
+
+/// The explorer on a small synthetic volume, in a 1200×800 window.
+fn explorer() -> Harness<'static, FlexisoApp> {
+    let field = Synthetic::cube(40).generate();
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .with_pixels_per_point(1.0)
+        .build_eframe(move |_cc| FlexisoApp::new_for_test(field));
+    h.run_steps(3);
+    h
+}
+
+fn settle(h: &mut Harness<'_, FlexisoApp>) {
+    h.run_steps(2);
+    h.state_mut().wait_for_extractions();
+    h.run_steps(2);
+}
+
+fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
+    h.hover_at(p);
+    h.run_steps(1);
+    h.drag_at(p);
+    h.run_steps(1);
+    h.drop_at(p);
+    settle(h);
+}
+
+/// Presses the button at `a`, moves to `b` in small steps, and leaves it
+/// held there.
+fn drag_and_hold(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
+    h.hover_at(a);
+    h.run_steps(1);
+    h.drag_at(a);
+    h.run_steps(1);
+    for i in 1..=10 {
+        h.hover_at(a + (b - a) * (i as f32 / 10.0));
+        h.run_steps(1);
+    }
+}
+
+fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
+    drag_and_hold(h, a, b);
+    h.drop_at(b);
+    settle(h);
+}
+
+fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
+    let app = h.state();
+    let level = app.level().expect("level");
+    let sim = level.simplification();
+    let span = |a: SimplifiedArcId| {
+        let la = level.arc(a);
+        sim.node_value(la.upper) - sim.node_value(la.lower)
+    };
+    app.tree_panel()
+        .drawn
+        .arcs
+        .iter()
+        .copied()
+        .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
+        .expect("the tree panel drew arcs")
+}
+
+fn key(h: &mut Harness<'_, FlexisoApp>, m: Modifiers, k: Key) {
+    h.key_press_modifiers(m, k);
+    settle(h);
+}
+
+fn undo(h: &mut Harness<'_, FlexisoApp>) {
+    key(h, Modifiers::COMMAND, Key::Z);
+}
+
+fn heights(h: &Harness<'_, FlexisoApp>) -> Vec<f64> {
+    h.state().selection().contours.iter().map(|c| c.h).collect()
+}
+
+/// One contour selected on the tallest arc, and the marker's position.
+fn one_contour(h: &mut Harness<'_, FlexisoApp>) -> Pos2 {
+    let (_, p) = tallest_arc(h);
+    click(h, p);
+    assert_eq!(h.state().selection().contours.len(), 1);
+    h.state().tree_panel().drawn.markers[0].1
+}
+
+#[test]
+fn ctrl_z_undoes_a_selection_and_ctrl_shift_z_and_ctrl_y_redo_it() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    undo(&mut h);
+    assert!(
+        h.state().selection().contours.is_empty(),
+        "selection undone"
+    );
+    key(&mut h, Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    assert_eq!(
+        h.state().selection().contours.len(),
+        1,
+        "Ctrl+Shift+Z redoes"
+    );
+    let c = &h.state().selection().contours[0];
+    assert!(c.mesh.is_some(), "the redone contour is extracted again");
+    undo(&mut h);
+    key(&mut h, Modifiers::COMMAND, Key::Y);
+    assert_eq!(h.state().selection().contours.len(), 1, "Ctrl+Y redoes");
+}
+
+#[test]
+fn a_marker_drag_is_one_step_however_many_frames_it_took() {
+    let mut h = explorer();
+    let m = one_contour(&mut h);
+    let before = heights(&h);
+    drag(&mut h, m, m + egui::vec2(0.0, -40.0));
+    let after = heights(&h);
+    assert_ne!(before, after, "the drag moved the isovalue");
+    undo(&mut h);
+    assert_eq!(heights(&h), before, "one undo undoes the whole drag");
+    key(&mut h, Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    assert_eq!(heights(&h), after, "redo moves it back");
+}
+
+#[test]
+fn escape_mid_drag_cancels_it_and_leaves_no_step() {
+    let mut h = explorer();
+    let m = one_contour(&mut h);
+    let before = heights(&h);
+    drag_and_hold(&mut h, m, m + egui::vec2(0.0, -40.0));
+    assert_ne!(heights(&h), before, "the drag is moving the contour");
+    h.key_press(Key::Escape);
+    h.run_steps(1);
+    // Moving on with the button still held drags nothing any more.
+    h.hover_at(m + egui::vec2(0.0, -60.0));
+    h.run_steps(1);
+    h.drop_at(m + egui::vec2(0.0, -60.0));
+    settle(&mut h);
+    assert_eq!(heights(&h), before, "the contour is back where it was");
+    assert_eq!(h.state().undo_label(), Some("new selection"));
+}
+
+#[test]
+fn escape_with_a_popup_open_closes_it_and_keeps_the_contours() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    assert!(h.query_by_label("Save session as…").is_some(), "menu open");
+    h.key_press(Key::Escape);
+    h.run_steps(2);
+    assert!(
+        h.query_by_label("Save session as…").is_none(),
+        "menu closed"
+    );
+    assert_eq!(h.state().selection().contours.len(), 1, "nothing cleared");
+}
+
+#[test]
+fn clear_contours_is_an_explicit_undoable_command_and_numbers_restart() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    h.get_by_label("Edit").click();
+    h.run_steps(2);
+    h.get_by_label("Clear contours").click();
+    settle(&mut h);
+    assert!(h.state().selection().contours.is_empty());
+    undo(&mut h);
+    assert_eq!(h.state().selection().contours.len(), 1, "clear undone");
+    h.get_by_label("Edit").click();
+    h.run_steps(2);
+    h.get_by_label("Clear contours").click();
+    settle(&mut h);
+    one_contour(&mut h);
+    assert_eq!(
+        h.state().selection().contours[0].id.0,
+        0,
+        "numbering starts again after a clear"
+    );
+}
+
+#[test]
+fn colour_name_visibility_and_deletion_each_undo() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    // Colour (as the picker sets it).
+    h.state_mut().selection_mut().contours[0].colour = Color32::from_rgb(1, 2, 3);
+    settle(&mut h);
+    assert_eq!(h.state().undo_label(), Some("colour of contour 0"));
+    undo(&mut h);
+    assert_ne!(
+        h.state().selection().contours[0].colour,
+        Color32::from_rgb(1, 2, 3)
+    );
+    // Name, typed in the list: one step when typing ends.
+    h.get_by_role(egui::accesskit::Role::TextInput).focus();
+    h.run_steps(1);
+    h.get_by_role(egui::accesskit::Role::TextInput)
+        .type_text("brain");
+    h.run_steps(2);
+    assert_eq!(h.state().selection().contours[0].name, "brain");
+    h.key_press(Key::Enter);
+    settle(&mut h);
+    assert_eq!(h.state().undo_label(), Some("name of contour 0"));
+    undo(&mut h);
+    assert_eq!(h.state().selection().contours[0].name, "");
+    // Visibility.
+    h.get_by_label("visible").click();
+    settle(&mut h);
+    assert!(!h.state().selection().contours[0].visible);
+    undo(&mut h);
+    assert!(h.state().selection().contours[0].visible);
+    // Deletion.
+    h.get_by_label("delete").click();
+    settle(&mut h);
+    assert!(h.state().selection().contours.is_empty());
+    undo(&mut h);
+    assert_eq!(h.state().selection().contours.len(), 1, "deletion undone");
+    assert!(h.state().selection().contours[0].mesh.is_some());
+}
+
+#[test]
+fn the_level_and_the_measure_undo() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    let arcs = h.state().level().expect("level").num_arcs();
+    h.state_mut().set_level_arcs(arcs / 2);
+    settle(&mut h);
+    let fewer = h.state().level().expect("level").num_arcs();
+    assert!(fewer < arcs);
+    undo(&mut h);
+    assert_eq!(h.state().level().expect("level").num_arcs(), arcs);
+
+    let m = h.state().measure();
+    let other = if m == Measure::Height {
+        Measure::Volume
+    } else {
+        Measure::Height
+    };
+    h.state_mut().set_measure(other);
+    h.state_mut().wait_for_job();
+    settle(&mut h);
+    assert_eq!(
+        h.state().undo_label().map(str::to_string),
+        Some(format!("measure {}", other.name()))
+    );
+    undo(&mut h);
+    h.state_mut().wait_for_job();
+    settle(&mut h);
+    assert_eq!(h.state().measure(), m, "measure undone");
+    assert_eq!(h.state().level().expect("level").num_arcs(), arcs);
+    assert_eq!(h.state().selection().contours.len(), 1, "the contour stays");
+}
+
+#[test]
+fn quitting_with_unsaved_changes_asks_first() {
+    let mut h = explorer();
+    // Nothing made yet: Quit quits.
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("Quit").click();
+    h.run_steps(2);
+    assert!(h.state().closing(), "nothing to lose: no question");
+
+    let mut h = explorer();
+    one_contour(&mut h);
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("Quit").click();
+    h.run_steps(2);
+    assert_eq!(h.state().confirming(), Some(&Pending::Quit));
+    assert!(
+        h.query_by_label("Unsaved changes").is_some(),
+        "the question shows"
+    );
+    h.get_by_label("Cancel").click();
+    h.run_steps(2);
+    assert_eq!(h.state().confirming(), None);
+    assert!(!h.state().closing(), "Cancel keeps the window");
+    assert_eq!(h.state().selection().contours.len(), 1);
+
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("Quit").click();
+    h.run_steps(2);
+    h.get_by_label("Discard changes").click();
+    h.run_steps(2);
+    assert!(h.state().closing(), "Discard closes");
+}
+
+#[test]
+fn opening_another_volume_with_unsaved_changes_asks_first() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("Open the built-in dataset").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().confirming(),
+        Some(&Pending::Open("synthetic".into()))
+    );
+    assert!(!h.state().busy(), "nothing opens before the answer");
+    h.key_press(Key::Escape);
+    h.run_steps(2);
+    assert_eq!(h.state().confirming(), None, "Escape cancels the question");
+    assert!(!h.state().busy());
+    assert_eq!(h.state().selection().contours.len(), 1);
+}
