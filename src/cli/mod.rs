@@ -2,6 +2,7 @@
 //! and a `run` that returns an error for the binary to print (exit code 2).
 
 pub mod bench;
+pub mod bench_engines;
 pub mod extract;
 pub mod info;
 pub mod input;

@@ -6,7 +6,7 @@
 use super::input::InputArgs;
 use crate::progress::Progress;
 use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
-use crate::tree::ContourTree;
+use crate::tree::{BuildTimes, ContourTree, raichel_seshadhri};
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -29,6 +29,24 @@ pub struct Args {
     /// Simplify by pruning every leaf whose cost is at most X.
     #[arg(long, value_name = "X")]
     pub feature_size: Option<f64>,
+    /// The engine that builds the tree (both give the same tree).
+    #[arg(long, value_enum, default_value_t = Algorithm::CarrSnoeyinkAxen)]
+    pub algorithm: Algorithm,
+    /// Also count the value comparisons of each stage (in a second build:
+    /// the times printed are of the uncounted one).
+    #[arg(long)]
+    pub count_comparisons: bool,
+}
+
+/// The contour tree engines.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Algorithm {
+    /// Sort, join and split sweeps, merge (Carr, Snoeyink, Axen): the default.
+    #[default]
+    #[value(alias = "sweep")]
+    CarrSnoeyinkAxen,
+    /// Painting without the global sort (Raichel, Seshadhri).
+    RaichelSeshadhri,
 }
 
 /// Runs `flexiso tree`.
@@ -37,8 +55,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let volume = args.input.load()?;
     let load = t.elapsed();
     let field = &volume.field;
-    let (tree, times) = ContourTree::from_field(field, &Progress::new())
-        .map_err(|_| anyhow::anyhow!("cancelled"))?;
+    let cancelled = |_| anyhow::anyhow!("cancelled");
+    let (tree, timing) = match args.algorithm {
+        Algorithm::CarrSnoeyinkAxen => {
+            let (tree, times) =
+                ContourTree::from_field(field, &Progress::new()).map_err(cancelled)?;
+            (tree, Timing::Engine(times))
+        }
+        Algorithm::RaichelSeshadhri => {
+            let (tree, stats) =
+                raichel_seshadhri::from_field(field, false, &Progress::new()).map_err(cancelled)?;
+            (tree, Timing::Painting(stats))
+        }
+    };
     let [x, y, z] = field.dims();
     let (lo, hi) = field.range();
     let (maxima, minima, joins, splits) = tree.kind_counts();
@@ -90,18 +119,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None
     };
     let s = |d: std::time::Duration| d.as_secs_f64();
-    println!(
-        "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
-        s(load),
-        s(times.sort),
-        s(times.links),
-        s(times.join),
-        s(times.split),
-        s(times.sweeps),
-        s(times.merge),
-        s(times.augment),
-        s(times.total()),
-    );
+    match timing {
+        Timing::Engine(times) => println!(
+            "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
+            s(load),
+            s(times.sort),
+            s(times.links),
+            s(times.join),
+            s(times.split),
+            s(times.sweeps),
+            s(times.merge),
+            s(times.augment),
+            s(times.total()),
+        ),
+        Timing::Painting(stats) => {
+            let times = stats.times;
+            println!(
+                "time (s):       load {:.3}  links {:.3}  paint join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  numbering {:.3}  locate {:.3}  arc sort {:.3}  total {:.3} (without load; {} critical vertices painted)",
+                s(load),
+                s(times.links),
+                s(times.join),
+                s(times.split),
+                s(times.paint),
+                s(times.merge),
+                s(times.number),
+                s(times.locate),
+                s(times.arc_sort),
+                s(times.total()),
+                stats.critical,
+            );
+        }
+    }
+    if args.count_comparisons {
+        print_comparisons(field, args.algorithm)?;
+    }
     if let Some(path) = &args.json {
         let mut json = crate::tree::json::tree_json(&tree, field);
         crate::measure::betti::ContourTopology::new(&tree, field).add_to_json(&mut json);
@@ -123,6 +174,56 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             std::fs::write(path, text)
                 .with_context(|| format!("{}: cannot write", path.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The stage times of either engine.
+enum Timing {
+    Engine(BuildTimes),
+    Painting(raichel_seshadhri::Stats),
+}
+
+/// Builds the tree again through a counting order and prints the value
+/// comparisons per stage, next to n log2 n.
+fn print_comparisons(
+    field: &crate::field::ScalarField,
+    algorithm: Algorithm,
+) -> anyhow::Result<()> {
+    let n = field.len() as f64;
+    let n_log_n = n * n.max(1.0).log2();
+    let m = |c: u64| c as f64 / 1e6;
+    match algorithm {
+        Algorithm::CarrSnoeyinkAxen => {
+            let (_, c) = raichel_seshadhri::count::engine_comparisons(field, &Progress::new())
+                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            println!(
+                "comparisons (M): sort {:.3} ({})  links and sweeps {:.3}  total {:.3} = {:.2} per vertex; a comparison sort: n log2 n = {:.3}",
+                m(c.sort),
+                c.sort_kind,
+                m(c.sweeps),
+                m(c.total()),
+                c.total() as f64 / n,
+                n_log_n / 1e6,
+            );
+        }
+        Algorithm::RaichelSeshadhri => {
+            let (_, stats) = raichel_seshadhri::from_field(field, true, &Progress::new())
+                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let c = stats.comparisons;
+            println!(
+                "comparisons (M): links {:.3}  painting {:.3}  numbering {:.3}  locate {:.3}  arc sort {:.3}  total {:.3} = {:.2} per vertex (tree without augmentation {:.3}); n log2 n = {:.3}",
+                m(c.links),
+                m(c.paint),
+                m(c.number),
+                m(c.locate),
+                m(c.arc_sort),
+                m(c.total()),
+                c.total() as f64 / n,
+                m(c.tree()),
+                n_log_n / 1e6,
+            );
         }
     }
     Ok(())
