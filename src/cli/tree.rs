@@ -2,6 +2,8 @@
 //! --feature-size X]`: the contour tree of a volume, its statistics and the
 //! time of each stage; the size after collapsing zero-height arcs;
 //! optionally a simplified level; optionally all of it as JSON.
+//! `--algorithm raichel-seshadhri` builds the same tree without the global
+//! sort; `--count-comparisons` adds the value comparisons per stage.
 
 use super::input::InputArgs;
 use crate::progress::Progress;

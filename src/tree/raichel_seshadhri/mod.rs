@@ -828,3 +828,28 @@ impl SuperarcWalk {
         arcs[0]
     }
 }
+
+/// The paper's bound without its constant (Theorem 1): Σ log2 ℓ_v over the
+/// supernodes v, ℓ_v the number of nodes on the longest monotone path of
+/// the tree through v. Add the mesh's size N for the whole bound.
+pub fn shape_term(tree: &ContourTree) -> f64 {
+    let nodes = tree.nodes();
+    let k = nodes.len();
+    // Nodes are in the vertex order, so one pass each way settles the
+    // longest paths down (to a minimum) and up (to a maximum).
+    let mut down = vec![1u32; k];
+    for i in 0..k {
+        for &a in tree.up_arcs(NodeId(i as u32)) {
+            let u = tree.arc(a).upper.0 as usize;
+            down[u] = down[u].max(down[i] + 1);
+        }
+    }
+    let mut up = vec![1u32; k];
+    for i in (0..k).rev() {
+        for &a in tree.down_arcs(NodeId(i as u32)) {
+            let l = tree.arc(a).lower.0 as usize;
+            up[l] = up[l].max(up[i] + 1);
+        }
+    }
+    (0..k).map(|i| ((up[i] + down[i] - 1) as f64).log2()).sum()
+}
