@@ -33,12 +33,15 @@
 //!    m' maps to a monotone path from v down to m'. So v's superarc lies on
 //!    the tree path from u's place down towards m', and it is the first arc
 //!    on that path whose lower end is below v. Vertices are placed after the
-//!    neighbour they climb to, so each walks from its upper neighbour's arc:
-//!    one comparison per vertex plus one per supernode crossed, each with a
-//!    supernode on the vertex's own monotone path (an ancestor or
-//!    descendant in the augmented tree). The way down at a node towards m'
-//!    is chosen by Euler-tour intervals of the tree rooted at the global
-//!    minimum, without comparisons.
+//!    neighbour they climb to (the lowest upper neighbour reachable along
+//!    link edges, whose order step 1 already knows), so each starts from its
+//!    upper neighbour's arc: one comparison when v lies on it, else a
+//!    search along the rest of the path by Myers' jump pointers in the tree
+//!    rooted at the global minimum (O(log depth) comparisons; a plain walk
+//!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
+//!    comparison is with a supernode on v's own monotone path (an ancestor
+//!    or descendant in the augmented tree). The way down at a node towards
+//!    m' is chosen by Euler-tour intervals, without comparisons.
 //! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
 //!    k_a regular vertices. The paper computes the unaugmented tree and has
 //!    no such term; it is the price of the augmented one.
@@ -70,7 +73,8 @@
 //! 4 bytes of masks, 4 of critical index, 4 of descent minimum, 4 of place
 //! (the tree's `vertex_arc`), and during painting 8 per orientation (paint
 //! and BFS queue, both orientations at once): about 32 bytes at the peak,
-//! plus O(t) for the critical vertices.
+//! plus O(t) for the critical vertices (colours, heap entries of 16 bytes,
+//! jump pointers).
 
 pub mod count;
 pub mod families;
