@@ -39,6 +39,16 @@ pub struct Args {
     /// Repetitions per dataset; the fastest is reported.
     #[arg(long, default_value_t = 1)]
     pub repeat: usize,
+    /// `raichel-seshadhri`: compare the two engines instead (times and
+    /// value comparisons, on the experiment's families and the volumes).
+    #[arg(long, value_enum, default_value_t = super::tree::Algorithm::CarrSnoeyinkAxen)]
+    pub algorithm: super::tree::Algorithm,
+    /// Edge lengths of the experiment's families (with --algorithm).
+    #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+    pub families: Vec<usize>,
+    /// Also write the comparison's rows to this CSV file (with --algorithm).
+    #[arg(long, value_name = "PATH")]
+    pub csv: Option<PathBuf>,
 }
 
 /// One row of the table.
@@ -68,6 +78,9 @@ pub struct Row {
 
 /// Runs `flexiso bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.algorithm == super::tree::Algorithm::RaichelSeshadhri {
+        return super::bench_engines::run(&args, &args.families, args.csv.as_ref());
+    }
     let mut inputs: Vec<PathBuf> = std::fs::read_dir(&args.dir)
         .with_context(|| format!("{}: cannot list the folder", args.dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))

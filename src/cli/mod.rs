@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 pub mod arcs;
 pub mod bench;
+pub mod bench_engines;
 pub mod extract;
 pub mod info;
 pub mod input;

@@ -2,13 +2,15 @@
 //! --feature-size X]`: the contour tree of a volume, its statistics and the
 //! time of each stage; the size after collapsing zero-height arcs;
 //! optionally a simplified level; optionally all of it as JSON.
+//! `--algorithm raichel-seshadhri` builds the same tree without the global
+//! sort; `--count-comparisons` adds the value comparisons per stage.
 
 use super::input::InputArgs;
 use super::{Report, SpaceArg};
 use crate::progress::Progress;
 use crate::report;
 use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
-use crate::tree::ContourTree;
+use crate::tree::{BuildTimes, ContourTree, raichel_seshadhri};
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -40,6 +42,24 @@ pub struct Args {
     /// crossings; with --json, a "layout" object inside "simplified").
     #[arg(long)]
     pub layout: bool,
+    /// The engine that builds the tree (both give the same tree).
+    #[arg(long, value_enum, default_value_t = Algorithm::CarrSnoeyinkAxen)]
+    pub algorithm: Algorithm,
+    /// Also count the value comparisons of each stage (in a second build:
+    /// the times printed are of the uncounted one).
+    #[arg(long)]
+    pub count_comparisons: bool,
+}
+
+/// The contour tree engines.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Algorithm {
+    /// Sort, join and split sweeps, merge (Carr, Snoeyink, Axen): the default.
+    #[default]
+    #[value(alias = "sweep")]
+    CarrSnoeyinkAxen,
+    /// Painting without the global sort (Raichel, Seshadhri).
+    RaichelSeshadhri,
 }
 
 /// Runs `flexiso tree`.
@@ -55,8 +75,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let load = t.elapsed();
     let field = &volume.field;
-    let (tree, times) = ContourTree::from_field(field, &Progress::new())
-        .map_err(|_| anyhow::anyhow!("cancelled"))?;
+    let cancelled = |_| anyhow::anyhow!("cancelled");
+    let (tree, timing) = match args.algorithm {
+        Algorithm::CarrSnoeyinkAxen => {
+            let (tree, times) =
+                ContourTree::from_field(field, &Progress::new()).map_err(cancelled)?;
+            (tree, Timing::Engine(times))
+        }
+        Algorithm::RaichelSeshadhri => {
+            let (tree, stats) =
+                raichel_seshadhri::from_field(field, false, &Progress::new()).map_err(cancelled)?;
+            (tree, Timing::Painting(stats))
+        }
+    };
     let [x, y, z] = field.dims();
     let (lo, hi) = field.range();
     let (maxima, minima, joins, splits) = tree.kind_counts();
@@ -132,19 +163,42 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         _ => None,
     };
     let s = |d: std::time::Duration| d.as_secs_f64();
-    report!(
-        r,
-        "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
-        s(load),
-        s(times.sort),
-        s(times.links),
-        s(times.join),
-        s(times.split),
-        s(times.sweeps),
-        s(times.merge),
-        s(times.augment),
-        s(times.total()),
-    );
+    match timing {
+        Timing::Engine(times) => report!(
+            r,
+            "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
+            s(load),
+            s(times.sort),
+            s(times.links),
+            s(times.join),
+            s(times.split),
+            s(times.sweeps),
+            s(times.merge),
+            s(times.augment),
+            s(times.total()),
+        ),
+        Timing::Painting(stats) => {
+            let times = stats.times;
+            report!(
+                r,
+                "time (s):       load {:.3}  links {:.3}  paint join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  numbering {:.3}  locate {:.3}  arc sort {:.3}  total {:.3} (without load; {} critical vertices painted)",
+                s(load),
+                s(times.links),
+                s(times.join),
+                s(times.split),
+                s(times.paint),
+                s(times.merge),
+                s(times.number),
+                s(times.locate),
+                s(times.arc_sort),
+                s(times.total()),
+                stats.critical,
+            );
+        }
+    }
+    if args.count_comparisons {
+        print_comparisons(&r, field, args.algorithm)?;
+    }
     if let Some(path) = &args.json {
         let mut json = crate::tree::json::tree_json(&tree, field);
         add_geometry(&mut json, &volume, args.space);
@@ -209,4 +263,57 @@ fn add_geometry(json: &mut serde_json::Value, volume: &crate::field::io::Volume,
             }),
         );
     }
+}
+
+/// The stage times of either engine.
+enum Timing {
+    Engine(BuildTimes),
+    Painting(raichel_seshadhri::Stats),
+}
+
+/// Builds the tree again through a counting order and prints the value
+/// comparisons per stage, next to n log2 n.
+fn print_comparisons(
+    r: &Report,
+    field: &crate::field::ScalarField,
+    algorithm: Algorithm,
+) -> anyhow::Result<()> {
+    let n = field.len() as f64;
+    let n_log_n = n * n.max(1.0).log2();
+    let m = |c: u64| c as f64 / 1e6;
+    match algorithm {
+        Algorithm::CarrSnoeyinkAxen => {
+            let (_, c) = raichel_seshadhri::count::engine_comparisons(field, &Progress::new())
+                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            report!(
+                r,
+                "comparisons (M): sort {:.3} ({})  links and sweeps {:.3}  total {:.3} = {:.2} per vertex; a comparison sort: n log2 n = {:.3}",
+                m(c.sort),
+                c.sort_kind,
+                m(c.sweeps),
+                m(c.total()),
+                c.total() as f64 / n,
+                n_log_n / 1e6,
+            );
+        }
+        Algorithm::RaichelSeshadhri => {
+            let (_, stats) = raichel_seshadhri::from_field(field, true, &Progress::new())
+                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let c = stats.comparisons;
+            report!(
+                r,
+                "comparisons (M): links {:.3}  painting {:.3}  numbering {:.3}  locate {:.3}  arc sort {:.3}  total {:.3} = {:.2} per vertex (tree without augmentation {:.3}); n log2 n = {:.3}",
+                m(c.links),
+                m(c.paint),
+                m(c.number),
+                m(c.locate),
+                m(c.arc_sort),
+                m(c.total()),
+                c.total() as f64 / n,
+                m(c.tree()),
+                n_log_n / 1e6,
+            );
+        }
+    }
+    Ok(())
 }

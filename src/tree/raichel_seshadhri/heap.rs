@@ -6,7 +6,7 @@
 //!
 //! Entries are indices into the arena; a heap is named by its root entry
 //! (`NONE` for the empty heap). Each entry holds a vertex, its first child
-//! and its next sibling: 12 bytes per entry.
+//! its next sibling and the caller's name for it: 16 bytes per entry.
 
 use crate::field::VertexOrder;
 
@@ -16,6 +16,7 @@ pub const NONE: u32 = u32::MAX;
 /// The arena of all heaps.
 pub struct PairingHeaps {
     vertex: Vec<u32>,
+    item: Vec<u32>,
     child: Vec<u32>,
     sibling: Vec<u32>,
     scratch: Vec<u32>,
@@ -26,25 +27,28 @@ impl PairingHeaps {
     pub fn with_capacity(capacity: usize) -> Self {
         Self {
             vertex: Vec::with_capacity(capacity),
+            item: Vec::with_capacity(capacity),
             child: Vec::with_capacity(capacity),
             sibling: Vec::with_capacity(capacity),
             scratch: Vec::new(),
         }
     }
 
-    /// A new one-entry heap holding vertex `v`.
-    pub fn singleton(&mut self, v: u32) -> u32 {
+    /// A new one-entry heap holding vertex `v` (compared by the order) with
+    /// a name `item` for the caller (what [`Self::top`] returns).
+    pub fn singleton(&mut self, v: u32, item: u32) -> u32 {
         let e = self.vertex.len() as u32;
         self.vertex.push(v);
+        self.item.push(item);
         self.child.push(NONE);
         self.sibling.push(NONE);
         e
     }
 
-    /// The vertex at a heap's root (its highest), or `None` when empty.
+    /// The item at a heap's root (its highest vertex), or `None` when empty.
     #[inline]
     pub fn top(&self, root: u32) -> Option<u32> {
-        (root != NONE).then(|| self.vertex[root as usize])
+        (root != NONE).then(|| self.item[root as usize])
     }
 
     /// Melds two heaps (one comparison) and returns the root.
@@ -106,7 +110,7 @@ mod tests {
         // Ten heaps of twenty, melded together one by one.
         let mut roots = vec![NONE; 10];
         for v in 0..200u32 {
-            let e = heaps.singleton(v);
+            let e = heaps.singleton(v, v);
             let r = &mut roots[v as usize % 10];
             *r = heaps.meld(*r, e, order);
         }

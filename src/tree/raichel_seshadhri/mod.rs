@@ -33,12 +33,15 @@
 //!    m' maps to a monotone path from v down to m'. So v's superarc lies on
 //!    the tree path from u's place down towards m', and it is the first arc
 //!    on that path whose lower end is below v. Vertices are placed after the
-//!    neighbour they climb to, so each walks from its upper neighbour's arc:
-//!    one comparison per vertex plus one per supernode crossed, each with a
-//!    supernode on the vertex's own monotone path (an ancestor or
-//!    descendant in the augmented tree). The way down at a node towards m'
-//!    is chosen by Euler-tour intervals of the tree rooted at the global
-//!    minimum, without comparisons.
+//!    neighbour they climb to (the lowest upper neighbour reachable along
+//!    link edges, whose order step 1 already knows), so each starts from its
+//!    upper neighbour's arc: one comparison when v lies on it, else a
+//!    search along the rest of the path by Myers' jump pointers in the tree
+//!    rooted at the global minimum (O(log depth) comparisons; a plain walk
+//!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
+//!    comparison is with a supernode on v's own monotone path (an ancestor
+//!    or descendant in the augmented tree). The way down at a node towards
+//!    m' is chosen by Euler-tour intervals, without comparisons.
 //! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
 //!    k_a regular vertices. The paper computes the unaugmented tree and has
 //!    no such term; it is the price of the augmented one.
@@ -70,7 +73,8 @@
 //! 4 bytes of masks, 4 of critical index, 4 of descent minimum, 4 of place
 //! (the tree's `vertex_arc`), and during painting 8 per orientation (paint
 //! and BFS queue, both orientations at once): about 32 bytes at the peak,
-//! plus O(t) for the critical vertices.
+//! plus O(t) for the critical vertices (colours, heap entries of 16 bytes,
+//! jump pointers).
 
 pub mod count;
 pub mod families;
@@ -392,6 +396,59 @@ pub fn build<O: CountingOrder + ?Sized>(
     progress.stage("augment");
     let t0 = Instant::now();
     let c0 = values.comparisons();
+    // Climb and descend to the neighbour nearest in id among those the
+    // mask allows: on a plateau (equal values, ordered by id) that is the
+    // next vertex in the order, so the edge spans few supernodes.
+    let mut by_nearness: Vec<u32> = (0..offsets.len() as u32).collect();
+    by_nearness.sort_by_key(|&k| offsets[k as usize].unsigned_abs());
+    let nearest: Vec<u8> = (0..1u32 << offsets.len())
+        .map(|mask| {
+            by_nearness
+                .iter()
+                .find(|&&k| mask & (1 << k) != 0)
+                .map_or(0, |&k| k as u8)
+        })
+        .collect();
+    // link_step[k][j]: the direction from v + d_k to v + d_j when the two
+    // are joined in v's link (d_j - d_k is a direction), else NO_STEP.
+    const NO_STEP: u8 = u8::MAX;
+    let dirs = grid.directions();
+    let link_step: Vec<[u8; 16]> = dirs
+        .iter()
+        .map(|dk| {
+            let mut row = [NO_STEP; 16];
+            for (j, dj) in dirs.iter().enumerate() {
+                let diff = [dj[0] - dk[0], dj[1] - dk[1], dj[2] - dk[2]];
+                if let Some(e) = dirs.iter().position(|d| *d == diff) {
+                    row[j] = e as u8;
+                }
+            }
+            row
+        })
+        .collect();
+    // The upper neighbour to climb to: from the nearest, down the link's
+    // edges while a lower upper neighbour is joined to it. Those edges were
+    // compared in step 1, so this compares nothing, and the edge climbed
+    // spans few supernodes even at the foot of a cliff.
+    let climb = |v: u32| -> u32 {
+        let up = upper[v as usize] as u32;
+        let mut cur = nearest[up as usize] as usize;
+        'down: loop {
+            let u = step(v, &offsets, cur as u32);
+            let below_u = lower[u as usize] as u32;
+            let mut cand = up & !(1 << cur);
+            while cand != 0 {
+                let j = cand.trailing_zeros() as usize;
+                cand &= cand - 1;
+                let e = link_step[cur][j];
+                if e != NO_STEP && below_u & (1 << e) != 0 {
+                    cur = j;
+                    continue 'down;
+                }
+            }
+            return u;
+        }
+    };
     let walk = SuperarcWalk::new(&nodes, &arcs);
     // The minimum each vertex descends to, as a node id.
     let mut min_of = vec![NONE; n];
@@ -403,7 +460,7 @@ pub fn build<O: CountingOrder + ?Sized>(
         let mut x = v;
         while min_of[x as usize] == NONE && lower[x as usize] != 0 {
             chain.push(x);
-            x = step(x, &offsets, (lower[x as usize] as u32).trailing_zeros());
+            x = step(x, &offsets, nearest[lower[x as usize] as usize] as u32);
         }
         let m = if min_of[x as usize] != NONE {
             min_of[x as usize]
@@ -426,7 +483,7 @@ pub fn build<O: CountingOrder + ?Sized>(
         let mut x = v;
         while place[x as usize] == NONE {
             chain.push(x);
-            x = step(x, &offsets, (upper[x as usize] as u32).trailing_zeros());
+            x = climb(x);
         }
         let mut from = place[x as usize];
         while let Some(y) = chain.pop() {
@@ -436,12 +493,13 @@ pub fn build<O: CountingOrder + ?Sized>(
             } else {
                 from
             };
-            loop {
-                let lower_end = arcs[arc as usize].lower.0;
-                if values.above(y, nodes[lower_end as usize].vertex) {
-                    break;
-                }
-                arc = walk.down_towards(lower_end, m);
+            // Most vertices lie on the first arc; past it, a search by jump
+            // pointers along the rest of the path (see SuperarcWalk).
+            let lower_end = arcs[arc as usize].lower.0;
+            if !values.above(y, nodes[lower_end as usize].vertex) {
+                arc = walk.locate(lower_end, m, |node| {
+                    values.above(nodes[node as usize].vertex, y)
+                });
             }
             place[y as usize] = arc;
             from = arc;
@@ -569,6 +627,13 @@ struct SuperarcWalk {
     lower: Vec<u32>,
     /// Parent node in the rooted tree.
     parent: Vec<u32>,
+    /// The arc to the parent.
+    parent_arc: Vec<u32>,
+    /// Depth in the rooted tree and Myers' jump pointer (an ancestor whose
+    /// depth depends on the node's depth only, so that any monotone search
+    /// along the ancestors takes O(log depth) steps).
+    depth: Vec<u32>,
+    jump: Vec<u32>,
     tin: Vec<u32>,
     tout: Vec<u32>,
 }
@@ -607,8 +672,23 @@ impl SuperarcWalk {
         let lower = arcs.iter().map(|a| a.lower.0).collect();
         // Nodes are in vertex order: node 0 is the global minimum.
         let mut parent = vec![NONE; k];
+        let mut parent_arc = vec![NONE; k];
+        let mut depth = vec![0u32; k];
+        let mut jump = vec![0u32; k];
         let mut tin = vec![0u32; k];
         let mut tout = vec![0u32; k];
+        // Arc ids alongside the undirected adjacency.
+        let mut adj_arc = vec![0u32; 2 * arcs.len()];
+        {
+            let mut f = adj_off.clone();
+            for (i, a) in arcs.iter().enumerate() {
+                let (u, l) = (a.upper.0 as usize, a.lower.0 as usize);
+                adj_arc[f[u] as usize] = i as u32;
+                f[u] += 1;
+                adj_arc[f[l] as usize] = i as u32;
+                f[l] += 1;
+            }
+        }
         if k > 0 {
             let mut clock = 0u32;
             let mut stack: Vec<(u32, u32)> = vec![(0, adj_off[0])];
@@ -621,6 +701,17 @@ impl SuperarcWalk {
                     stack[top].1 += 1;
                     if w != parent[v as usize] {
                         parent[w as usize] = v;
+                        parent_arc[w as usize] = adj_arc[e as usize];
+                        depth[w as usize] = depth[v as usize] + 1;
+                        let j = jump[v as usize];
+                        let jj = jump[j as usize];
+                        jump[w as usize] = if depth[v as usize] - depth[j as usize]
+                            == depth[j as usize] - depth[jj as usize]
+                        {
+                            jj
+                        } else {
+                            v
+                        };
                         tin[w as usize] = clock;
                         clock += 1;
                         stack.push((w, adj_off[w as usize]));
@@ -636,8 +727,81 @@ impl SuperarcWalk {
             down,
             lower,
             parent,
+            parent_arc,
+            depth,
+            jump,
             tin,
             tout,
+        }
+    }
+
+    /// Lowest common ancestor, by jump pointers (no comparisons).
+    fn lca(&self, mut a: u32, mut b: u32) -> u32 {
+        let d = |x: u32| self.depth[x as usize];
+        if d(a) < d(b) {
+            std::mem::swap(&mut a, &mut b);
+        }
+        while d(a) > d(b) {
+            let j = self.jump[a as usize];
+            a = if d(j) >= d(b) {
+                j
+            } else {
+                self.parent[a as usize]
+            };
+        }
+        // Equal depths have equal jump depths: lift both together.
+        while a != b {
+            let (ja, jb) = (self.jump[a as usize], self.jump[b as usize]);
+            if ja != jb {
+                a = ja;
+                b = jb;
+            } else {
+                a = self.parent[a as usize];
+                b = self.parent[b as usize];
+            }
+        }
+        a
+    }
+
+    /// The arc at a height on the monotone path from node `s` down to the
+    /// minimum `m`: `above(x)` says whether node x is above that height
+    /// (true at `s`, false at `m`). The path climbs from `s` to the common
+    /// ancestor c and descends to `m`; along each part `above` changes once,
+    /// and jump pointers find the change in O(log depth) comparisons.
+    fn locate(&self, s: u32, m: u32, mut above: impl FnMut(u32) -> bool) -> u32 {
+        let c = self.lca(s, m);
+        let dc = self.depth[c as usize];
+        if c != s && !above(c) {
+            // On s's side: the last ancestor of s above the height.
+            let mut x = s;
+            loop {
+                let j = self.jump[x as usize];
+                if self.depth[j as usize] > dc && above(j) {
+                    x = j;
+                    continue;
+                }
+                let p = self.parent[x as usize];
+                if p != c && above(p) {
+                    x = p;
+                    continue;
+                }
+                return self.parent_arc[x as usize];
+            }
+        }
+        // On m's side: the last ancestor of m below the height.
+        let mut x = m;
+        loop {
+            let j = self.jump[x as usize];
+            if self.depth[j as usize] > dc && !above(j) {
+                x = j;
+                continue;
+            }
+            let p = self.parent[x as usize];
+            if p != c && !above(p) {
+                x = p;
+                continue;
+            }
+            return self.parent_arc[x as usize];
         }
     }
 
@@ -667,4 +831,29 @@ impl SuperarcWalk {
         // Unreachable on a correct tree; any arc keeps the walk finite.
         arcs[0]
     }
+}
+
+/// The paper's bound without its constant (Theorem 1): Σ log2 ℓ_v over the
+/// supernodes v, ℓ_v the number of nodes on the longest monotone path of
+/// the tree through v. Add the mesh's size N for the whole bound.
+pub fn shape_term(tree: &ContourTree) -> f64 {
+    let nodes = tree.nodes();
+    let k = nodes.len();
+    // Nodes are in the vertex order, so one pass each way settles the
+    // longest paths down (to a minimum) and up (to a maximum).
+    let mut down = vec![1u32; k];
+    for i in 0..k {
+        for &a in tree.up_arcs(NodeId(i as u32)) {
+            let u = tree.arc(a).upper.0 as usize;
+            down[u] = down[u].max(down[i] + 1);
+        }
+    }
+    let mut up = vec![1u32; k];
+    for i in (0..k).rev() {
+        for &a in tree.down_arcs(NodeId(i as u32)) {
+            let l = tree.arc(a).lower.0 as usize;
+            up[l] = up[l].max(up[i] + 1);
+        }
+    }
+    (0..k).map(|i| ((up[i] + down[i] - 1) as f64).log2()).sum()
 }

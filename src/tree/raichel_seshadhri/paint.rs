@@ -132,8 +132,26 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
     let mut heaps = PairingHeaps::with_capacity(t + t / 2);
     let mut root = vec![heap::NONE; colours];
     let mut uf: Vec<u32> = (0..colours as u32).collect();
+    let mut rank = vec![0u8; colours];
     let mut processed = vec![false; t];
     let mut remaining = 0usize;
+    // col(v) of every critical vertex, distinct initial colours, kept
+    // beside it so that the loop below reads one short row per vertex
+    // instead of the paint of all its upper neighbours.
+    let mut col_off = vec![0u32; t + 1];
+    let mut cols: Vec<u32> = Vec::with_capacity(2 * t);
+    for (i, &v) in m.critical.iter().enumerate() {
+        let start = cols.len();
+        let mut up = m.upper[v as usize] as u32;
+        while up != 0 {
+            let c = paint[step(v, m.offsets, up.trailing_zeros()) as usize];
+            up &= up - 1;
+            if !cols[start..].contains(&c) {
+                cols.push(c);
+            }
+        }
+        col_off[i + 1] = cols.len() as u32;
+    }
     for (i, &v) in m.critical.iter().enumerate() {
         let up = m.upper[v as usize] as u32;
         if up == 0 {
@@ -143,7 +161,7 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         remaining += 1;
         m.grid.link_components(up, |k| {
             let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
-            let e = heaps.singleton(v);
+            let e = heaps.singleton(v, i as u32);
             root[c] = heaps.meld(root[c], e, order);
         });
     }
@@ -159,16 +177,17 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         if done % (CHECK_EVERY / 16) == 0 {
             progress.check(n + done * n / t.max(1), 2 * n)?;
         }
-        // update(K): climb to a ripe vertex.
+        // update(K): climb to a ripe vertex. The stack and the heaps name
+        // critical vertices by their index.
         if stack.is_empty() {
             while processed[cursor] {
                 cursor += 1;
             }
-            stack.push(m.critical[cursor]);
+            stack.push(cursor as u32);
         }
-        let h = loop {
+        let hs = loop {
             let h = *stack.last().unwrap_or(&NONE);
-            if processed[m.slot[h as usize] as usize] {
+            if processed[h as usize] {
                 // Pushed twice and already processed from the top.
                 stack.pop();
                 if stack.is_empty() {
@@ -177,11 +196,8 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
                 continue;
             }
             let mut blocker = NONE;
-            let mut up = m.upper[h as usize] as u32;
-            while up != 0 {
-                let u = step(h, m.offsets, up.trailing_zeros());
-                up &= up - 1;
-                let r = find(&mut uf, paint[u as usize]);
+            for &c in &cols[col_off[h as usize] as usize..col_off[h as usize + 1] as usize] {
+                let r = find(&mut uf, c);
                 match heaps.top(root[r as usize]) {
                     Some(top) if top != h => {
                         blocker = top;
@@ -195,18 +211,14 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
             }
             stack.push(blocker);
         };
-        if h == NONE {
+        if hs == NONE {
             continue;
         }
         stack.pop();
-        // build 2b-f: process the ripe h.
-        let hs = m.slot[h as usize];
+        // build 2b-f: process the ripe vertex.
         cur.clear();
-        let mut up = m.upper[h as usize] as u32;
-        while up != 0 {
-            let u = step(h, m.offsets, up.trailing_zeros());
-            up &= up - 1;
-            let r = find(&mut uf, paint[u as usize]);
+        for &c in &cols[col_off[hs as usize] as usize..col_off[hs as usize + 1] as usize] {
+            let r = find(&mut uf, c);
             if !cur.contains(&r) {
                 cur.push(r);
             }
@@ -215,15 +227,26 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         for &r in &cur {
             parent[att[r as usize] as usize] = hs;
             let mut hr = root[r as usize];
-            while heaps.top(hr) == Some(h) {
+            while heaps.top(hr) == Some(hs) {
                 hr = heaps.pop(hr, order);
             }
             root[r as usize] = heap::NONE;
             melded = heaps.meld(melded, hr, order);
         }
-        let c = cur[0];
+        // Union by rank: the representative is the class of highest rank.
+        let mut c = cur[0];
         for &r in &cur[1..] {
-            uf[r as usize] = c;
+            if rank[r as usize] > rank[c as usize] {
+                c = r;
+            }
+        }
+        for &r in &cur {
+            if r != c {
+                if rank[r as usize] == rank[c as usize] {
+                    rank[c as usize] += 1;
+                }
+                uf[r as usize] = c;
+            }
         }
         root[c as usize] = melded;
         att[c as usize] = hs;
