@@ -79,7 +79,12 @@ pub struct Row {
 /// Runs `flexiso bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.algorithm == super::tree::Algorithm::RaichelSeshadhri {
-        return super::bench_engines::run(&args, &args.families, args.csv.as_ref());
+        let volumes = super::bench_engines::Volumes {
+            dir: &args.dir,
+            only: args.only.as_deref(),
+            repeat: args.repeat,
+        };
+        return super::bench_engines::run(&volumes, &args.families, args.csv.as_ref());
     }
     let mut inputs: Vec<PathBuf> = std::fs::read_dir(&args.dir)
         .with_context(|| format!("{}: cannot list the folder", args.dir.display()))?

@@ -7,7 +7,6 @@
 //! the rows also go to a file, for the README's plot
 //! (scripts/raichel_seshadhri_plot.py).
 
-use super::bench::Args;
 use crate::field::ScalarField;
 use crate::field::io::{ReadOptions, read_volume};
 use crate::progress::Progress;
@@ -121,8 +120,19 @@ fn print_row(r: &Row) {
     );
 }
 
+/// What to compare: the shared volumes of `dir` (those whose name
+/// contains `only`, if given), each timed `repeat` times.
+pub struct Volumes<'a> {
+    /// The folder of volumes.
+    pub dir: &'a std::path::Path,
+    /// Only the volumes whose file name contains this.
+    pub only: Option<&'a str>,
+    /// Runs per volume (the fastest is kept).
+    pub repeat: usize,
+}
+
 /// Runs the comparison; `sizes` are the families' edge lengths.
-pub fn run(args: &Args, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow::Result<()> {
+pub fn run(args: &Volumes<'_>, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow::Result<()> {
     let mut rows = Vec::new();
     print_header();
     for &s in sizes {
@@ -141,7 +151,7 @@ pub fn run(args: &Args, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow::Resul
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "nrrd"))
             .filter(|p| {
-                args.only.as_deref().is_none_or(|o| {
+                args.only.is_none_or(|o| {
                     p.file_name()
                         .is_some_and(|n| n.to_string_lossy().contains(o))
                 })

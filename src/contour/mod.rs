@@ -46,6 +46,7 @@
 pub mod export;
 pub mod follow;
 pub mod global;
+pub mod marching;
 #[doc(hidden)]
 pub mod oracle;
 pub mod seed;

@@ -11,8 +11,8 @@
 //!   of all contours must be this mesh.
 
 use super::ContourMesh;
-use super::follow::{IdBuildHasher, TetTables};
 use super::global::{follow_all, spanning_arcs};
+use super::marching::{IdBuildHasher, TetTables};
 use super::seed::{PathSeed, PathSeeds};
 use crate::field::{Isovalue, Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;

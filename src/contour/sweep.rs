@@ -50,7 +50,7 @@
 //! cube masks), 20 bytes per contour vertex (downhill gradient, root and
 //! label) and two dense tables of one plane per worker.
 
-use super::follow::{Cancelled, TetTables, area_normal, downhill, normalize, prefer_gradient};
+use super::marching::{Cancelled, TetTables, area_normal, downhill, normalize, prefer_gradient};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};

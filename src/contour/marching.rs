@@ -1,0 +1,292 @@
+//! The marching-tetrahedra primitives the contour extractors share: the
+//! tables of the six Freudenthal tetrahedra of a cube (cases, face
+//! neighbours), the id hasher of their tables, the cancellation answer, and
+//! the vertex geometry (downhill gradient, area-weighted face normals,
+//! vertex normals). The follower ([`super::follow`]), the parallel sweep
+//! ([`super::sweep`]) and the tests' oracles ([`super::oracle`]) all build
+//! on these, so none of them imports another for them.
+
+use crate::field::Scalar;
+use crate::mesh::CUBE_TETRAHEDRA;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::OnceLock;
+
+/// Multiply-xorshift hasher for 64-bit ids (tetrahedra, edges).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct IdHasher(u64);
+
+impl Hasher for IdHasher {
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, x: u64) {
+        let h = (x ^ self.0).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 = h ^ (h >> 29);
+    }
+}
+
+/// Hash-builder of [`IdHasher`].
+pub type IdBuildHasher = BuildHasherDefault<IdHasher>;
+
+/// A triangle of a marching-tetrahedra case: three crossed edges of the
+/// tetrahedron, each as (local index below, local index above).
+pub(crate) type CaseTriangle = [(u8, u8); 3];
+
+/// Tables of the six tetrahedra of a cube.
+pub(crate) struct TetTables {
+    /// Neighbour across the face opposite local vertex k: cube offset and
+    /// the neighbour's permutation.
+    pub(crate) neighbour: [[([i64; 3], u8); 4]; 6],
+    /// Triangles for (permutation, bit mask of the local vertices above),
+    /// wound counter-clockwise seen from below.
+    pub(crate) cases: [[([CaseTriangle; 2], u8); 16]; 6],
+}
+
+/// Corner of a cube (bit mask) as integer coordinates.
+pub(super) fn corner(m: u8) -> [i64; 3] {
+    [(m & 1) as i64, (m >> 1 & 1) as i64, (m >> 2 & 1) as i64]
+}
+
+impl TetTables {
+    pub(crate) fn get() -> &'static TetTables {
+        static T: OnceLock<TetTables> = OnceLock::new();
+        T.get_or_init(TetTables::new)
+    }
+
+    fn new() -> Self {
+        let axis = |bit: u8| bit.trailing_zeros() as usize;
+        let perm: [[usize; 3]; 6] =
+            CUBE_TETRAHEDRA.map(|t| [axis(t[1]), axis(t[2] ^ t[1]), axis(t[3] ^ t[2])]);
+        let find = |p: [usize; 3]| {
+            perm.iter()
+                .position(|q| *q == p)
+                .map(|i| i as u8)
+                .unwrap_or(0)
+        };
+        let neighbour = perm.map(|[i, j, k]| {
+            let mut e = [[0i64; 3]; 3];
+            e[0][i] = 1;
+            e[1][j] = 1;
+            e[2][k] = 1;
+            [
+                (e[0], find([j, k, i])),
+                ([0; 3], find([j, i, k])),
+                ([0; 3], find([i, k, j])),
+                (e[2].map(|c| -c), find([k, i, j])),
+            ]
+        });
+        let mut cases = [[([[(0u8, 0u8); 3]; 2], 0u8); 16]; 6];
+        for p in 0..6 {
+            let pos = CUBE_TETRAHEDRA[p].map(corner);
+            for mask in 1u8..15 {
+                let above: Vec<u8> = (0..4).filter(|&l| mask >> l & 1 == 1).collect();
+                let below: Vec<u8> = (0..4).filter(|&l| mask >> l & 1 == 0).collect();
+                // Crossed edges in cyclic order around the piece.
+                let cycle: Vec<(u8, u8)> = match (below.len(), above.len()) {
+                    (1, 3) => above.iter().map(|&a| (below[0], a)).collect(),
+                    (3, 1) => below.iter().map(|&b| (b, above[0])).collect(),
+                    _ => vec![
+                        (below[0], above[0]),
+                        (below[1], above[0]),
+                        (below[1], above[1]),
+                        (below[0], above[1]),
+                    ],
+                };
+                // Orient with edge midpoints (doubled, exact): the piece's
+                // normal must point to the below side. Positive diagonal
+                // scaling (spacing) and sliding the points along their edges
+                // (interpolation) keep the sign.
+                let mid = |(b, a): (u8, u8)| {
+                    let (pb, pa) = (pos[b as usize], pos[a as usize]);
+                    [pb[0] + pa[0], pb[1] + pa[1], pb[2] + pa[2]]
+                };
+                let m: Vec<[i64; 3]> = cycle.iter().map(|&e| mid(e)).collect();
+                let sub = |a: [i64; 3], b: [i64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+                let (u, v) = (sub(m[1], m[0]), sub(m[2], m[0]));
+                let n = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                let centroid = |s: &[u8]| {
+                    s.iter()
+                        .fold([0i64; 3], |c, &l| {
+                            let q = pos[l as usize];
+                            [c[0] + 4 * q[0], c[1] + 4 * q[1], c[2] + 4 * q[2]]
+                        })
+                        .map(|c| c / s.len() as i64)
+                };
+                let d = sub(centroid(&below), centroid(&above));
+                let mut cycle = cycle;
+                if n[0] * d[0] + n[1] * d[1] + n[2] * d[2] < 0 {
+                    cycle.reverse();
+                }
+                let mut tris = [[(0u8, 0u8); 3]; 2];
+                tris[0] = [cycle[0], cycle[1], cycle[2]];
+                let count = if cycle.len() == 4 {
+                    tris[1] = [cycle[0], cycle[2], cycle[3]];
+                    2
+                } else {
+                    1
+                };
+                cases[p][mask as usize] = (tris, count);
+            }
+        }
+        Self { neighbour, cases }
+    }
+}
+
+/// Why an extraction stopped before its end: the caller's cancel check
+/// answered true (a newer request superseded it). Nothing of the partial
+/// contour is returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the contour extraction was cancelled")]
+pub struct Cancelled;
+
+/// Unit vertex normals from the field's gradient (central differences,
+/// one-sided on the box's faces), interpolated along each vertex's mesh
+/// edge `(below, above, s)` and pointing downhill. Where the gradient
+/// vanishes (plateaus of quantised scans, exactly where `h = f(v)`
+/// extraction lands) or disagrees with the triangles' winding (the
+/// central-difference gradient is not the gradient of the piecewise-linear
+/// interpolant the triangles come from), the area-weighted triangle normal
+/// stands in, so shading never flips a vertex inside out.
+pub fn gradient_normals<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    vertex_edges: &[(u32, u32, f32)],
+    positions: &[[f32; 3]],
+    indices: &[u32],
+) -> Vec<[f32; 3]> {
+    let mut normals = vertex_normals(positions, indices);
+    apply_gradient_normals(values, dims, spacing, vertex_edges, &mut normals);
+    normals
+}
+
+/// The gradient half of [`gradient_normals`]: replaces each unit normal in
+/// `normals` (area-weighted, of the vertex on `vertex_edges[i]`) by the
+/// downhill gradient where that agrees with it.
+fn apply_gradient_normals<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    vertex_edges: &[(u32, u32, f32)],
+    normals: &mut [[f32; 3]],
+) {
+    let coords = |v: u32| {
+        let v = v as usize;
+        (
+            v,
+            [v % dims[0], v / dims[0] % dims[1], v / (dims[0] * dims[1])],
+        )
+    };
+    for (n, &(b, a, s)) in normals.iter_mut().zip(vertex_edges) {
+        let g = downhill(values, dims, spacing, coords(b), coords(a), s as f64);
+        prefer_gradient(n, g);
+    }
+}
+
+/// The unit downhill direction at the contour vertex a fraction `s` from
+/// `below` to `above` (each a vertex id with its coordinates): the field's
+/// gradients at the two ends (central differences, one-sided on the box's
+/// faces), interpolated and negated. `None` where it vanishes.
+#[inline]
+pub(crate) fn downhill<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    below: (usize, [usize; 3]),
+    above: (usize, [usize; 3]),
+    s: f64,
+) -> Option<[f32; 3]> {
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let gradient = |(v, c): (usize, [usize; 3])| -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let lo = if c[k] > 0 { v - stride[k] } else { v };
+            let hi = if c[k] + 1 < dims[k] { v + stride[k] } else { v };
+            let steps = (hi - lo) / stride[k];
+            if steps == 0 {
+                0.0
+            } else {
+                (values[hi].to_f64() - values[lo].to_f64()) / (steps as f64 * spacing[k])
+            }
+        })
+    };
+    let (gb, ga) = (gradient(below), gradient(above));
+    let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])));
+    let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    (l > 0.0 && l.is_finite()).then(|| g.map(|x| (x / l) as f32))
+}
+
+/// Takes the downhill gradient `g` for the unit normal `n` (area-weighted,
+/// from the triangles) where it agrees with the triangles' winding.
+#[inline]
+pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
+    if let Some(g) = g
+        && g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0.0
+    {
+        *n = g;
+    }
+}
+
+/// Unit vertex normals as area-weighted sums of the triangle normals (a
+/// vertex whose triangles all have zero area, or that no triangle uses,
+/// gets +z; triangles with a corner out of range or a non-finite normal
+/// are skipped). The one definition: the renderer's `compute_normals` is
+/// this function, and the sweep adds the same [`area_normal`]s.
+pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+    let mut acc = vec![[0f32; 3]; positions.len()];
+    for tri in indices.chunks_exact(3) {
+        if tri.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
+        let n = area_normal(positions, tri);
+        if !n.iter().all(|c| c.is_finite()) {
+            continue;
+        }
+        for &i in tri {
+            let s = &mut acc[i as usize];
+            s[0] += n[0];
+            s[1] += n[1];
+            s[2] += n[2];
+        }
+    }
+    normalize(&mut acc);
+    acc
+}
+
+/// Twice the area times the unit normal of triangle `tri` (counter-
+/// clockwise), the weight of a face in an area-weighted vertex normal.
+#[inline]
+pub(crate) fn area_normal(positions: &[[f32; 3]], tri: &[u32]) -> [f32; 3] {
+    let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| positions[i as usize]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// Scales each normal to unit length (a zero or non-finite one becomes +z).
+pub(crate) fn normalize(normals: &mut [[f32; 3]]) {
+    for n in normals {
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        *n = if l > 0.0 && l.is_finite() {
+            [n[0] / l, n[1] / l, n[2] / l]
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+    }
+}
