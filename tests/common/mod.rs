@@ -6,6 +6,8 @@
 //!   `FLEXISO_REQUIRE_GPU=1`.
 //! * [`bin`]: running the `flexiso` binary and reading what it printed.
 //! * [`formats`]: volume files for the reader tests (encoders, writers).
+//! * [`tree_oracle`]: the contour tree checked against brute force from the
+//!   definitions (join/split trees, node degrees, level-set components).
 //!
 //! Each test binary compiles this module whole and uses a part of it.
 #![allow(dead_code, unused_imports, clippy::unwrap_used)]
@@ -14,6 +16,7 @@ pub mod bin;
 pub mod data;
 pub mod formats;
 pub mod gpu;
+pub mod tree_oracle;
 
 pub use bin::{Run, flexiso, flexiso_with_stdin, flexiso_without_display};
 pub use data::{data_dir, dataset};
