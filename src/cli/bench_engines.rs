@@ -146,7 +146,7 @@ pub fn run(args: &Volumes<'_>, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow
         }
     }
     if args.dir.is_dir() {
-        let mut inputs: Vec<PathBuf> = std::fs::read_dir(&args.dir)
+        let mut inputs: Vec<PathBuf> = std::fs::read_dir(args.dir)
             .with_context(|| format!("{}: cannot list the folder", args.dir.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "nrrd"))

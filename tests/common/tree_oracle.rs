@@ -269,7 +269,7 @@ pub fn check_against_oracles(field: &ScalarField, tree: &ContourTree) {
         tree.nodes().len().max(1),
         "superarcs = supernodes - 1"
     );
-    let edges = augmented_edges(&tree);
+    let edges = augmented_edges(tree);
     assert_eq!(edges.len(), n - 1, "augmented tree has n - 1 arcs");
     for &(lo, hi) in &edges {
         assert!(rank[lo] < rank[hi], "arc ({lo},{hi}) points down");

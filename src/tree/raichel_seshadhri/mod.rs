@@ -474,7 +474,7 @@ pub fn build<O: CountingOrder + ?Sized>(
         chain.clear();
     }
     for v in 0..n as u32 {
-        if v as usize % (1 << 20) == 0 {
+        if (v as usize).is_multiple_of(1 << 20) {
             progress.check(v as usize, n)?;
         }
         if place[v as usize] != NONE {

@@ -174,7 +174,7 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
     let mut done = 0usize;
     while remaining > 0 {
         done += 1;
-        if done % (CHECK_EVERY / 16) == 0 {
+        if done.is_multiple_of(CHECK_EVERY / 16) {
             progress.check(n + done * n / t.max(1), 2 * n)?;
         }
         // update(K): climb to a ripe vertex. The stack and the heaps name
