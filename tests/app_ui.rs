@@ -228,6 +228,58 @@ fn moving_the_curve_slider_changes_the_number_of_arcs_drawn() {
     assert_eq!(after, h.state().level().expect("level").num_arcs());
 }
 
+/// Clicks the arc-count box, selects its text and types `n` over it.
+fn type_arcs(h: &mut Harness<'_, FlexisoApp>, n: usize) {
+    h.get_by_label("arcs:").click();
+    h.run_steps(1);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.run_steps(1);
+    h.get_by_label("arcs:").type_text(&n.to_string());
+}
+
+/// The arc-count box applies on Enter, not on each keystroke, and gives
+/// exactly the count asked for when the pruning sequence has that level;
+/// a count the sequence skips gives the nearest level, and says so.
+#[test]
+fn the_arc_count_box_applies_on_enter_and_gives_the_exact_count() {
+    let (mut h, _) = explorer();
+    let sim = std::sync::Arc::clone(h.state().level().expect("level").simplification());
+    let counts: Vec<usize> = sim.curve().iter().map(|p| p.arcs).collect();
+    let start = h.state().level().expect("level").num_arcs();
+    // A two-digit count the sequence has (nearest 25), other than the
+    // level shown, whose first digit alone would be another level.
+    let asked = counts
+        .iter()
+        .copied()
+        .filter(|&n| (10..100).contains(&n) && n != start && !counts.contains(&(n / 10)))
+        .min_by_key(|&n| n.abs_diff(25))
+        .expect("a two-digit level");
+    type_arcs(&mut h, asked);
+    h.run_steps(3);
+    assert_eq!(
+        h.state().level().expect("level").num_arcs(),
+        start,
+        "typing without Enter changes nothing"
+    );
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    let level = h.state().level().expect("level");
+    assert_eq!(level.num_arcs(), asked, "exactly the count typed");
+    assert_eq!(h.state().tree_panel().drawn.arcs.len(), asked);
+
+    // A count no level has (a step with a reduction removes two arcs).
+    let gap = (2..counts[0])
+        .find(|n| !counts.contains(n))
+        .expect("a count the sequence skips");
+    type_arcs(&mut h, gap);
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    let got = h.state().level().expect("level").num_arcs();
+    assert_eq!(got.abs_diff(gap), 1, "the nearest level to {gap}: {got}");
+    let note = format!("no level has {gap} arcs: nearest {got}");
+    assert!(h.query_by_label(&note).is_some(), "the box says so");
+}
+
 /// A level far away is reached over several frames, a bounded number of
 /// steps each, and ends where it would have in one go.
 #[test]
