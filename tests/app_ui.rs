@@ -280,6 +280,66 @@ fn the_arc_count_box_applies_on_enter_and_gives_the_exact_count() {
     assert!(h.query_by_label(&note).is_some(), "the box says so");
 }
 
+/// Simplifying never orphans a contour silently: one whose branch is
+/// pruned keeps a marker on the live arc that absorbed it, or the contour
+/// list says it is hidden by simplification (and no marker is drawn).
+#[test]
+fn simplifying_keeps_every_selected_contour_marked_or_listed_as_hidden() {
+    let (mut h, _) = explorer();
+    // Contours on the shortest arcs of a fine level: the first pruned.
+    let arcs: Vec<SimplifiedArcId> = {
+        let level = h.state().level().expect("level");
+        let sim = level.simplification();
+        let mut arcs: Vec<SimplifiedArcId> = level.arcs().map(|a| a.id).collect();
+        arcs.sort_by(|x, y| {
+            let span = |a: SimplifiedArcId| {
+                let la = level.arc(a);
+                sim.node_value(la.upper) - sim.node_value(la.lower)
+            };
+            span(*x).total_cmp(&span(*y)).then(x.cmp(y))
+        });
+        arcs.truncate(8);
+        arcs
+    };
+    for a in arcs {
+        h.state_mut().select_arc(a, false);
+    }
+    settle(&mut h);
+    let n = h.state().selection().contours.len();
+    assert!(n >= 4, "several contours selected: {n}");
+    assert_eq!(h.state().tree_panel().drawn.markers.len(), n);
+
+    h.state_mut().set_level_arcs(3);
+    h.run_steps(3);
+    let app = h.state();
+    let level = app.level().expect("level");
+    assert!(level.num_arcs() <= 3);
+    let markers = &app.tree_panel().drawn.markers;
+    let mut absorbed = 0;
+    let mut hidden = 0;
+    for c in &app.selection().contours {
+        let marked = markers.iter().any(|m| m.0 == c.id);
+        match level.absorbing_arc_of(c.superarc) {
+            Some(a) => {
+                assert!(level.is_live(a));
+                assert!(marked, "contour #{} keeps its marker", c.id);
+                if level.live_arc_of(c.superarc).is_none() {
+                    absorbed += 1;
+                }
+            }
+            None => {
+                assert!(!marked, "no marker for hidden contour #{}", c.id);
+                hidden += 1;
+            }
+        }
+    }
+    assert!(absorbed > 0, "some pruned contours stay attached");
+    let listed = h
+        .query_all_by_label(flexiso::app::panels::contour_list::HIDDEN)
+        .count();
+    assert_eq!(listed, hidden, "every hidden contour is listed as such");
+}
+
 /// A level far away is reached over several frames, a bounded number of
 /// steps each, and ends where it would have in one go.
 #[test]
