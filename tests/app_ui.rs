@@ -228,6 +228,118 @@ fn moving_the_curve_slider_changes_the_number_of_arcs_drawn() {
     assert_eq!(after, h.state().level().expect("level").num_arcs());
 }
 
+/// Clicks the arc-count box, selects its text and types `n` over it.
+fn type_arcs(h: &mut Harness<'_, FlexisoApp>, n: usize) {
+    h.get_by_label("arcs:").click();
+    h.run_steps(1);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.run_steps(1);
+    h.get_by_label("arcs:").type_text(&n.to_string());
+}
+
+/// The arc-count box applies on Enter, not on each keystroke, and gives
+/// exactly the count asked for when the pruning sequence has that level;
+/// a count the sequence skips gives the nearest level, and says so.
+#[test]
+fn the_arc_count_box_applies_on_enter_and_gives_the_exact_count() {
+    let (mut h, _) = explorer();
+    let sim = std::sync::Arc::clone(h.state().level().expect("level").simplification());
+    let counts: Vec<usize> = sim.curve().iter().map(|p| p.arcs).collect();
+    let start = h.state().level().expect("level").num_arcs();
+    // A two-digit count the sequence has (nearest 25), other than the
+    // level shown, whose first digit alone would be another level.
+    let asked = counts
+        .iter()
+        .copied()
+        .filter(|&n| (10..100).contains(&n) && n != start && !counts.contains(&(n / 10)))
+        .min_by_key(|&n| n.abs_diff(25))
+        .expect("a two-digit level");
+    type_arcs(&mut h, asked);
+    h.run_steps(3);
+    assert_eq!(
+        h.state().level().expect("level").num_arcs(),
+        start,
+        "typing without Enter changes nothing"
+    );
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    let level = h.state().level().expect("level");
+    assert_eq!(level.num_arcs(), asked, "exactly the count typed");
+    assert_eq!(h.state().tree_panel().drawn.arcs.len(), asked);
+
+    // A count no level has (a step with a reduction removes two arcs).
+    let gap = (2..counts[0])
+        .find(|n| !counts.contains(n))
+        .expect("a count the sequence skips");
+    type_arcs(&mut h, gap);
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    let got = h.state().level().expect("level").num_arcs();
+    assert_eq!(got.abs_diff(gap), 1, "the nearest level to {gap}: {got}");
+    let note = format!("no level has {gap} arcs: nearest {got}");
+    assert!(h.query_by_label(&note).is_some(), "the box says so");
+}
+
+/// Simplifying never orphans a contour silently: one whose branch is
+/// pruned keeps a marker on the live arc that absorbed it, or the contour
+/// list says it is hidden by simplification (and no marker is drawn).
+#[test]
+fn simplifying_keeps_every_selected_contour_marked_or_listed_as_hidden() {
+    let (mut h, _) = explorer();
+    // Contours on the shortest arcs of a fine level: the first pruned.
+    let arcs: Vec<SimplifiedArcId> = {
+        let level = h.state().level().expect("level");
+        let sim = level.simplification();
+        let mut arcs: Vec<SimplifiedArcId> = level.arcs().map(|a| a.id).collect();
+        arcs.sort_by(|x, y| {
+            let span = |a: SimplifiedArcId| {
+                let la = level.arc(a);
+                sim.node_value(la.upper) - sim.node_value(la.lower)
+            };
+            span(*x).total_cmp(&span(*y)).then(x.cmp(y))
+        });
+        arcs.truncate(8);
+        arcs
+    };
+    for a in arcs {
+        h.state_mut().select_arc(a, false);
+    }
+    settle(&mut h);
+    let n = h.state().selection().contours.len();
+    assert!(n >= 4, "several contours selected: {n}");
+    assert_eq!(h.state().tree_panel().drawn.markers.len(), n);
+
+    h.state_mut().set_level_arcs(3);
+    h.run_steps(3);
+    let app = h.state();
+    let level = app.level().expect("level");
+    assert!(level.num_arcs() <= 3);
+    let markers = &app.tree_panel().drawn.markers;
+    let mut absorbed = 0;
+    let mut hidden = 0;
+    for c in &app.selection().contours {
+        let marked = markers.iter().any(|m| m.0 == c.id);
+        match level.absorbing_arc_of(c.superarc) {
+            Some(a) => {
+                assert!(level.is_live(a));
+                assert!(marked, "contour #{} keeps its marker", c.id);
+                if level.live_arc_of(c.superarc).is_none() {
+                    absorbed += 1;
+                }
+            }
+            None => {
+                assert!(!marked, "no marker for hidden contour #{}", c.id);
+                hidden += 1;
+            }
+        }
+    }
+    assert!(absorbed > 0, "some pruned contours stay attached");
+    let listed = h
+        .query_all_by_label(flexiso::app::panels::contour_list::HIDDEN)
+        .count();
+    assert_eq!(listed, hidden, "every hidden contour is listed as such");
+}
+
 /// A level far away is reached over several frames, a bounded number of
 /// steps each, and ends where it would have in one go.
 #[test]

@@ -333,7 +333,15 @@ fn check_levels(field: &ScalarField) {
                 }
             }
             for (e, o) in owner.iter().enumerate() {
-                assert_eq!(level.live_arc_of(flexiso::tree::ArcId(e as u32)), *o);
+                let s = flexiso::tree::ArcId(e as u32);
+                assert_eq!(level.live_arc_of(s), *o);
+                // The absorbing arc: the same where one holds it, else
+                // (a pruned branch) some live arc, or none.
+                match (level.absorbing_arc_of(s), o) {
+                    (a, Some(_)) => assert_eq!(a, *o),
+                    (Some(a), None) => assert!(level.is_live(a)),
+                    (None, None) => {}
+                }
             }
         }
         // Up then down, down then up, and back to the full tree.

@@ -747,7 +747,12 @@ impl eframe::App for FlexisoApp {
             .exact_size(CONTOUR_PANEL_WIDTH)
             .show(ui, |ui| {
                 let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
-                panels::contour_list::ui(ui, &mut self.selection, tree.as_deref());
+                panels::contour_list::ui(
+                    ui,
+                    &mut self.selection,
+                    tree.as_deref(),
+                    self.level.as_ref(),
+                );
             });
         let mut view_rect = egui::Rect::NOTHING;
         egui::CentralPanel::default()

@@ -163,6 +163,8 @@ pub struct Simplification {
     /// Per arc id: the arc made by the reduction that ends it (`NONE` when
     /// it is pruned or never ends).
     merged_into: Vec<u32>,
+    /// Per arc id: the step that prunes it (`NONE` when none does).
+    pruned_at: Vec<u32>,
 }
 
 impl Simplification {
@@ -265,6 +267,10 @@ impl Simplification {
             merged_into[e1 as usize] = (m + i) as u32;
             merged_into[e2 as usize] = (m + i) as u32;
         }
+        let mut pruned_at = vec![NONE; upper.len()];
+        for (i, st) in steps.iter().enumerate() {
+            pruned_at[st.pruned.0 as usize] = i as u32;
+        }
         Self {
             measure,
             node_vertex,
@@ -284,6 +290,7 @@ impl Simplification {
             perturbed_arcs: base.perturbed_arcs(),
             superarc_base,
             merged_into,
+            pruned_at,
         }
     }
 
@@ -773,6 +780,63 @@ impl SimplifiedTree {
             // Dead: pruned (no successor), or reduced into an arc made at
             // an applied step (an arc ends at most once).
             a = self.sim.merged_into[a as usize];
+        }
+        None
+    }
+
+    /// The live arc that absorbed original superarc `s` at this level: the
+    /// one holding it ([`Self::live_arc_of`]), else, when its branch was
+    /// pruned, the arc that absorbed the pruned leaf: the arc made by the
+    /// reduction of the node it was pruned to, or (no reduction there) the
+    /// live arc at that node on the leaf's side (lowest id; the other side
+    /// when none), followed on through later steps. None for a zero-height
+    /// superarc, or when no live arc is left there. O(steps applied) at
+    /// worst.
+    pub fn absorbing_arc_of(&self, s: ArcId) -> Option<SimplifiedArcId> {
+        let sim = &*self.sim;
+        let mut a = *sim.superarc_base.get(s.0 as usize)?;
+        // Each move goes to an arc made or pruned at a later step, so this
+        // ends; bound it all the same.
+        for _ in 0..=2 * sim.steps.len() + 1 {
+            if a == NONE {
+                return None;
+            }
+            if self.is_live(SimplifiedArcId(a)) {
+                return Some(SimplifiedArcId(a));
+            }
+            if sim.merged_into[a as usize] != NONE {
+                a = sim.merged_into[a as usize];
+                continue;
+            }
+            let k = sim.pruned_at[a as usize];
+            if k == NONE || k as usize >= self.step {
+                return None;
+            }
+            let d = sim.diffs[k as usize];
+            if d.made != NONE {
+                a = d.made;
+                continue;
+            }
+            let lower_leaf = sim.steps[k as usize].lower_leaf;
+            let node = if lower_leaf { d.upper } else { d.lower };
+            let side = |want_down: bool| {
+                self.live_arcs
+                    .iter()
+                    .copied()
+                    .filter(|&e| {
+                        let e = e as usize;
+                        if want_down {
+                            sim.upper[e] == node
+                        } else {
+                            sim.lower[e] == node
+                        }
+                    })
+                    .min()
+            };
+            // A lower leaf hung below its node, an upper one above.
+            return side(lower_leaf)
+                .or_else(|| side(!lower_leaf))
+                .map(SimplifiedArcId);
         }
         None
     }

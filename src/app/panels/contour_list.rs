@@ -1,16 +1,29 @@
 //! The list of selected contours: colour, name, visibility, isolation,
 //! removal, and each contour's measurements (triangles, area, volume, genus) as
-//! they arrive from the extraction jobs.
+//! they arrive from the extraction jobs. A contour with no live arc at the
+//! shown level (its branch pruned and no arc left where it was absorbed)
+//! is listed as hidden by simplification: its marker is not drawn until a
+//! finer level shows its arc again.
 
 use egui::{Color32, RichText};
 
 use crate::app::format::fmt_value;
 use crate::app::selection::Selection;
+use crate::simplify::SimplifiedTree;
 use crate::tree::ContourTree;
 
+/// The note on a contour the simplification hides.
+pub const HIDDEN: &str = "hidden by simplification";
+
 /// Draws the list; edits the selection (colour, visibility, isolation,
-/// removal, the active contour).
-pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTree>) {
+/// removal, the active contour); `level` tells which contours the
+/// simplification hides.
+pub fn ui(
+    ui: &mut egui::Ui,
+    selection: &mut Selection,
+    tree: Option<&ContourTree>,
+    level: Option<&SimplifiedTree>,
+) {
     ui.heading("Contours");
     if selection.contours.is_empty() {
         ui.label("Click an arc in the tree (shift-click adds), or a surface.");
@@ -63,6 +76,11 @@ pub fn ui(ui: &mut egui::Ui, selection: &mut Selection, tree: Option<&ContourTre
                             selection.active = Some(c.id);
                         }
                     });
+                    if level.is_some_and(|l| l.absorbing_arc_of(c.superarc).is_none()) {
+                        ui.label(RichText::new(HIDDEN).weak()).on_hover_text(
+                            "its branch is pruned at this level: a finer level (more arcs) shows its marker again",
+                        );
+                    }
                     ui.add(
                         egui::TextEdit::singleline(&mut c.name)
                             .hint_text("name")

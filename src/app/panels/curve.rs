@@ -1,11 +1,18 @@
 //! The simplification curve (paper §5): arcs left against feature size,
-//! log-log, with the current level as a vertical line. Dragging on the plot
-//! (or the slider below it) moves the level; the tree panel follows at once
-//! (a level change replays only the steps in between).
+//! log-log, drawn as a step plot (the arcs stay constant between pruning
+//! steps), with the current level as a vertical line and a point (at the
+//! plot's left edge when its feature size is 0, e.g. the full tree of a
+//! label map). Dragging on the plot (or the slider above it) moves the
+//! level; the tree panel follows at once (a level change replays only the
+//! steps in between). The arc-count box applies on Enter or when it loses
+//! focus, never on a keystroke: it gives exactly the number asked for when
+//! the pruning sequence has a level with that many arcs (a step removes one
+//! or two arcs, so some counts are skipped), else the nearest level, and
+//! says so next to the box.
 
 use egui_plot::{GridMark, Line, Plot, PlotPoints, Points, VLine};
 
-use crate::simplify::SimplifiedTree;
+use crate::simplify::{Simplification, SimplifiedTree};
 
 /// The curve panel's state.
 pub struct CurvePanel {
@@ -16,6 +23,11 @@ pub struct CurvePanel {
     target: Option<(usize, usize)>,
     /// Pruning steps replayed per frame at most ([`STEPS_PER_FRAME`]).
     pub steps_per_frame: usize,
+    /// The text of the arc-count box while it is edited.
+    arcs_text: String,
+    /// The count last asked for in the box and the nearest count the
+    /// sequence has, when they differ (shown while that level is).
+    arcs_note: Option<(usize, usize)>,
 }
 
 impl Default for CurvePanel {
@@ -24,6 +36,8 @@ impl Default for CurvePanel {
             plot_rect: None,
             target: None,
             steps_per_frame: STEPS_PER_FRAME,
+            arcs_text: String::new(),
+            arcs_note: None,
         }
     }
 }
@@ -78,6 +92,43 @@ fn decade_grid(input: egui_plot::GridInput) -> Vec<GridMark> {
     marks
 }
 
+/// The level of `sim` whose arc count is nearest `arcs`: the step count
+/// and the arcs it leaves. Exactly `arcs` whenever some level has that
+/// many (the curve's arc counts never increase, so that level is the first
+/// with at most `arcs`); otherwise the nearer of its two neighbours (the
+/// one with fewer arcs on a tie).
+pub fn nearest_level(sim: &Simplification, arcs: usize) -> (usize, usize) {
+    let curve = sim.curve();
+    let s = sim.steps_for_arcs(arcs);
+    let here = curve[s].arcs;
+    if here == arcs || s == 0 {
+        return (s, here);
+    }
+    let above = curve[s - 1].arcs;
+    if above.abs_diff(arcs) < here.abs_diff(arcs) {
+        (s - 1, above)
+    } else {
+        (s, here)
+    }
+}
+
+/// The step plot of a curve drawn as log10 points (feature size, arcs):
+/// from each level, horizontally to the next level's feature size, then
+/// vertically to its arcs.
+fn step_plot(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut out = Vec::with_capacity(points.len() * 2);
+    for (i, &p) in points.iter().enumerate() {
+        if i > 0 {
+            let prev = points[i - 1];
+            if prev[1] != p[1] && prev[0] != p[0] {
+                out.push([p[0], prev[1]]);
+            }
+        }
+        out.push(p);
+    }
+    out
+}
+
 impl CurvePanel {
     /// Moves `level` towards step `target` by at most `steps_per_frame`
     /// steps, asking for another frame until it is there.
@@ -125,10 +176,40 @@ impl CurvePanel {
             let r = ui.add(
                 egui::Slider::new(&mut arcs, 1..=max_arcs)
                     .logarithmic(true)
+                    .show_value(false)
                     .text("arcs shown"),
             );
             if r.changed() {
                 target_step = Some(sim.steps_for_arcs(arcs));
+                self.arcs_note = None;
+            }
+            let label = ui.label("arcs:");
+            let r = ui
+                .add(
+                    egui::TextEdit::singleline(&mut self.arcs_text)
+                        .id_salt("arc_count")
+                        .desired_width(56.0),
+                )
+                .labelled_by(label.id);
+            let escaped = ui.input(|i| i.key_pressed(egui::Key::Escape));
+            if r.lost_focus() && !escaped {
+                match self.arcs_text.trim().parse::<usize>() {
+                    Ok(n) => {
+                        let (s, got) = nearest_level(&sim, n);
+                        target_step = Some(s);
+                        self.arcs_note = (got != n).then_some((n, got));
+                    }
+                    Err(_) => self.arcs_text = level.num_arcs().to_string(),
+                }
+            } else if !r.has_focus() {
+                self.arcs_text = level.num_arcs().to_string();
+            }
+            if let Some((asked, got)) = self.arcs_note {
+                if got == level.num_arcs() || target_step.is_some() || pending.is_some() {
+                    ui.label(format!("no level has {asked} arcs: nearest {got}"));
+                } else {
+                    self.arcs_note = None;
+                }
             }
             ui.label(format!(
                 "feature size {}",
@@ -136,11 +217,16 @@ impl CurvePanel {
             ));
         });
 
-        let points = curve;
+        let points = step_plot(curve);
+        // A level of feature size 0 (the full tree; any level of a label
+        // map's zero-cost prunes) sits at the plot's left edge.
+        let left = curve.iter().map(|p| p[0]).fold(f64::INFINITY, f64::min);
         let cur_x = if current > 0.0 {
-            Some(current.log10())
+            current.log10()
+        } else if left.is_finite() {
+            left
         } else {
-            None
+            0.0
         };
         let height = ui.available_height().max(60.0);
         let resp = Plot::new("simplification_curve")
@@ -158,12 +244,11 @@ impl CurvePanel {
             .x_grid_spacer(decade_grid)
             .y_grid_spacer(decade_grid)
             .show(ui, |plot_ui| {
-                plot_ui.line(Line::new("curve", PlotPoints::from(points.to_vec())).width(1.5));
-                if let Some(x) = cur_x {
-                    plot_ui.vline(VLine::new("level", x).width(2.0));
-                    let y = (level.num_arcs().max(1) as f64).log10();
-                    plot_ui.points(Points::new("current", vec![[x, y]]).radius(4.0));
-                }
+                plot_ui.line(Line::new("curve", PlotPoints::from(points)).width(1.5));
+                let x = cur_x;
+                plot_ui.vline(VLine::new("level", x).width(2.0));
+                let y = (level.num_arcs().max(1) as f64).log10();
+                plot_ui.points(Points::new("current", vec![[x, y]]).radius(4.0));
                 let r = plot_ui.response();
                 if (r.dragged() || r.clicked())
                     && let Some(p) = plot_ui.pointer_coordinate()

@@ -117,7 +117,7 @@ fn segment_distance(p: Pos2, a: Pos2, b: Pos2) -> f32 {
     (a + ab * t).distance(p)
 }
 
-/// A selected contour's marker on the live arc holding it.
+/// A selected contour's marker on the live arc holding it, or the one that absorbed it.
 #[derive(Clone, Copy)]
 struct Marker {
     id: ContourId,
@@ -285,10 +285,11 @@ impl TreePanel {
                 None => path[0] + (path[path.len() - 1] - path[0]) * 0.5,
             })
             .collect();
-        // Markers: each selected contour on the live arc holding it.
+        // Markers: each selected contour on the live arc holding it, or
+        // absorbing it when its branch is pruned (none when neither).
         let mut markers = Vec::new();
         for c in &sel.contours {
-            if let Some(a) = level.live_arc_of(c.superarc) {
+            if let Some(a) = level.absorbing_arc_of(c.superarc) {
                 let la = level.arc(a);
                 let (pu, pl) = (node_pos(la.upper), node_pos(la.lower));
                 let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
@@ -609,14 +610,14 @@ impl TreePanel {
         };
         // The dragged contour first, so it keeps following the pointer.
         let mut starts: Vec<SimplifiedArcId> = Vec::new();
-        let lead = sel.get(id).and_then(|c| level.live_arc_of(c.superarc));
+        let lead = sel.get(id).and_then(|c| level.absorbing_arc_of(c.superarc));
         starts.extend(lead);
         for c in sel
             .contours
             .iter()
             .filter(|c| c.group == group && c.id != id)
         {
-            if let Some(a) = level.live_arc_of(c.superarc) {
+            if let Some(a) = level.absorbing_arc_of(c.superarc) {
                 starts.push(a);
             }
         }
