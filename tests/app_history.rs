@@ -187,6 +187,14 @@ fn clear_contours_is_an_explicit_undoable_command_and_numbers_restart() {
     );
 }
 
+/// The contour's name field: the text input whose text is not the curve
+/// panel's arc count.
+fn name_field<'a>(h: &'a Harness<'_, FlexisoApp>) -> egui_kittest::Node<'a> {
+    h.query_all_by_role(egui::accesskit::Role::TextInput)
+        .find(|n| n.value().is_none_or(|v| v.trim().parse::<usize>().is_err()))
+        .expect("the name field")
+}
+
 #[test]
 fn colour_name_visibility_and_deletion_each_undo() {
     let mut h = explorer();
@@ -201,10 +209,9 @@ fn colour_name_visibility_and_deletion_each_undo() {
         Color32::from_rgb(1, 2, 3)
     );
     // Name, typed in the list: one step when typing ends.
-    h.get_by_role(egui::accesskit::Role::TextInput).focus();
+    name_field(&h).focus();
     h.run_steps(1);
-    h.get_by_role(egui::accesskit::Role::TextInput)
-        .type_text("brain");
+    name_field(&h).type_text("brain");
     h.run_steps(2);
     assert_eq!(h.state().selection().contours[0].name, "brain");
     h.key_press(Key::Enter);
