@@ -47,6 +47,9 @@ cleanup() {
 trap cleanup EXIT
 export DISPLAY="$DISP"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
+# A recovery file of an earlier (killed) run must not greet this one: the
+# program's state lives in this run's folder.
+export XDG_STATE_HOME="$OUT/state"
 sleep 1
 
 DUMP="$OUT/ui.txt"
