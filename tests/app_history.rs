@@ -9,7 +9,11 @@ use egui_kittest::kittest::Queryable;
 use flexiso::app::FlexisoApp;
 use flexiso::app::session::Pending;
 use flexiso::field::synthetic::Synthetic;
-use flexiso::simplify::{Measure, SimplifiedArcId};
+use flexiso::simplify::Measure;
+
+mod common;
+
+use common::harness::{click, drag, drag_and_hold, settle, tallest_arc};
 
 /// The explorer on a small synthetic volume, in a 1200×800 window.
 fn explorer() -> Harness<'static, FlexisoApp> {
@@ -20,57 +24,6 @@ fn explorer() -> Harness<'static, FlexisoApp> {
         .build_eframe(move |_cc| FlexisoApp::new_for_test(field));
     h.run_steps(3);
     h
-}
-
-fn settle(h: &mut Harness<'_, FlexisoApp>) {
-    h.run_steps(2);
-    h.state_mut().wait_for_extractions();
-    h.run_steps(2);
-}
-
-fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
-    h.hover_at(p);
-    h.run_steps(1);
-    h.drag_at(p);
-    h.run_steps(1);
-    h.drop_at(p);
-    settle(h);
-}
-
-/// Presses the button at `a`, moves to `b` in small steps, and leaves it
-/// held there.
-fn drag_and_hold(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
-    h.hover_at(a);
-    h.run_steps(1);
-    h.drag_at(a);
-    h.run_steps(1);
-    for i in 1..=10 {
-        h.hover_at(a + (b - a) * (i as f32 / 10.0));
-        h.run_steps(1);
-    }
-}
-
-fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
-    drag_and_hold(h, a, b);
-    h.drop_at(b);
-    settle(h);
-}
-
-fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
-    let app = h.state();
-    let level = app.level().expect("level");
-    let sim = level.simplification();
-    let span = |a: SimplifiedArcId| {
-        let la = level.arc(a);
-        sim.node_value(la.upper) - sim.node_value(la.lower)
-    };
-    app.tree_panel()
-        .drawn
-        .arcs
-        .iter()
-        .copied()
-        .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
-        .expect("the tree panel drew arcs")
 }
 
 fn key(h: &mut Harness<'_, FlexisoApp>, m: Modifiers, k: Key) {

@@ -4,7 +4,7 @@
 //! 3D view renders for real; without one these tests still run the UI but
 //! skip the renderer checks, unless `FLEXISO_REQUIRE_GPU=1`.
 
-use egui::{Pos2, pos2};
+use egui::pos2;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use flexiso::app::FlexisoApp;
@@ -13,6 +13,8 @@ use flexiso::field::synthetic::Synthetic;
 use flexiso::simplify::SimplifiedArcId;
 
 mod common;
+
+use common::harness::{click, drag, settle, tallest_arc};
 
 /// The explorer on a small synthetic volume, pipeline already run, in a
 /// 1200×800 window; the second value says whether the 3D view renders.
@@ -27,56 +29,6 @@ fn explorer() -> (Harness<'static, FlexisoApp>, bool) {
     h.run_steps(3);
     assert!(h.state().dataset().is_some(), "the test dataset loaded");
     (h, gpu)
-}
-
-/// A click: press and release at `p` (after moving there).
-fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
-    h.hover_at(p);
-    h.run_steps(1);
-    h.drag_at(p);
-    h.run_steps(1);
-    h.drop_at(p);
-    settle(h);
-}
-
-/// Lets the contour extractions in flight finish and the panels redraw.
-fn settle(h: &mut Harness<'_, FlexisoApp>) {
-    h.run_steps(2);
-    h.state_mut().wait_for_extractions();
-    h.run_steps(2);
-}
-
-/// A drag from `a` to `b` in small moves.
-fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
-    h.hover_at(a);
-    h.run_steps(1);
-    h.drag_at(a);
-    h.run_steps(1);
-    for i in 1..=10 {
-        h.hover_at(a + (b - a) * (i as f32 / 10.0));
-        h.run_steps(1);
-    }
-    h.drop_at(b);
-    settle(h);
-}
-
-/// The live arc spanning the widest range of values, and where the tree
-/// panel drew its midpoint.
-fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
-    let app = h.state();
-    let level = app.level().expect("level");
-    let sim = level.simplification();
-    let span = |a: SimplifiedArcId| {
-        let la = level.arc(a);
-        sim.node_value(la.upper) - sim.node_value(la.lower)
-    };
-    app.tree_panel()
-        .drawn
-        .arcs
-        .iter()
-        .copied()
-        .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
-        .expect("the tree panel drew arcs")
 }
 
 #[test]

@@ -4,6 +4,7 @@
 //!   when it is absent, fail when `FLEXISO_REQUIRE_DATA=1`.
 //! * [`gpu`]: a graphics adapter, or a skip; fail when
 //!   `FLEXISO_REQUIRE_GPU=1`.
+//! * [`harness`]: driving the explorer with egui_kittest (clicks, drags).
 //! * [`bin`]: running the `flexiso` binary and reading what it printed.
 //! * [`formats`]: volume files for the reader tests (encoders, writers).
 //! * [`tree_oracle`]: the contour tree checked against brute force from the
@@ -16,6 +17,7 @@ pub mod bin;
 pub mod data;
 pub mod formats;
 pub mod gpu;
+pub mod harness;
 pub mod tree_oracle;
 
 pub use bin::{Run, flexiso, flexiso_with_stdin, flexiso_without_display};

@@ -1,0 +1,63 @@
+//! Driving the explorer headless with egui_kittest as a user would:
+//! clicks, drags, and waiting for the contour extractions in flight.
+
+use egui::Pos2;
+use egui_kittest::Harness;
+use flexiso::app::FlexisoApp;
+use flexiso::simplify::SimplifiedArcId;
+
+/// Lets the contour extractions in flight finish and the panels redraw.
+pub fn settle(h: &mut Harness<'_, FlexisoApp>) {
+    h.run_steps(2);
+    h.state_mut().wait_for_extractions();
+    h.run_steps(2);
+}
+
+/// A click: press and release at `p` (after moving there).
+pub fn click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
+    h.hover_at(p);
+    h.run_steps(1);
+    h.drag_at(p);
+    h.run_steps(1);
+    h.drop_at(p);
+    settle(h);
+}
+
+/// Presses the button at `a`, moves to `b` in small steps, and leaves it
+/// held there.
+pub fn drag_and_hold(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
+    h.hover_at(a);
+    h.run_steps(1);
+    h.drag_at(a);
+    h.run_steps(1);
+    for i in 1..=10 {
+        h.hover_at(a + (b - a) * (i as f32 / 10.0));
+        h.run_steps(1);
+    }
+}
+
+/// A drag from `a` to `b` in small moves.
+pub fn drag(h: &mut Harness<'_, FlexisoApp>, a: Pos2, b: Pos2) {
+    drag_and_hold(h, a, b);
+    h.drop_at(b);
+    settle(h);
+}
+
+/// The live arc spanning the widest range of values, and where the tree
+/// panel drew its midpoint.
+pub fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
+    let app = h.state();
+    let level = app.level().expect("level");
+    let sim = level.simplification();
+    let span = |a: SimplifiedArcId| {
+        let la = level.arc(a);
+        sim.node_value(la.upper) - sim.node_value(la.lower)
+    };
+    app.tree_panel()
+        .drawn
+        .arcs
+        .iter()
+        .copied()
+        .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
+        .expect("the tree panel drew arcs")
+}
