@@ -6,6 +6,10 @@ struct Frame {
     fill_dir: vec4<f32>,
     // sRGB, straight alpha: written as is (the target is Rgba8Unorm).
     line_colour: vec4<f32>,
+    // The clipping plane: fragments with dot(clip.xyz, world) > clip.w
+    // are cut away (mesh.wgsl) when clip_on.x is 1.
+    clip: vec4<f32>,
+    clip_on: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

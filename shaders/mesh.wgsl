@@ -12,6 +12,10 @@ struct Frame {
     fill_dir: vec4<f32>,
     // Bounding-box line colour, sRGB, straight alpha (used by lines.wgsl).
     line_colour: vec4<f32>,
+    // The clipping plane: fragments with dot(clip.xyz, world) > clip.w
+    // are cut away (mesh.wgsl) when clip_on.x is 1.
+    clip: vec4<f32>,
+    clip_on: vec4<f32>,
 };
 
 struct Style {
@@ -71,6 +75,9 @@ fn srgb_from_linear(c: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    if frame.clip_on.x > 0.5 && dot(frame.clip.xyz, in.world) > frame.clip.w {
+        discard;
+    }
     let v = normalize(frame.eye.xyz - in.world);
     let len = length(in.normal);
     // A zero normal (degenerate input) is lit as if facing the viewer.

@@ -8,8 +8,17 @@
 //!  "camera": {"target": [90, 108, 90], "distance": 400, "yaw": -1.05,
 //!             "pitch": 0.44, "fov_y": 0.61},
 //!  "contours": [{"superarc": [UPPER, LOWER], "isovalue": 80.5,
-//!                "color": "#e6194b", "name": "brain", "visible": true}]}
+//!                "color": "#e6194b", "name": "brain", "visible": true}],
+//!  "slices": {"x": 90, "z": 60},
+//!  "clip": {"axis": "y", "at": 0.5, "keep": "above"},
+//!  "view": {"labels": true, "legend": true, "triad": true, "slices_panel": true}}
 //! ```
+//!
+//! `slices`, `clip` and `view` are optional (version 1 files without them
+//! open as before): `slices` holds the grid index of each slice shown
+//! (an axis left out shows none), `clip` the clipping plane across one
+//! axis at a fraction `at` of the volume's box, keeping what lies
+//! `below` or `above` it, and `view` the 3D view's switches.
 //!
 //! A contour is named as in the selection (see `app::selection`): by the
 //! original superarc it lies on, spelt as the vertex ids of its upper and
@@ -133,6 +142,101 @@ pub struct Session {
     pub camera: Option<CameraState>,
     /// The contours, in the order they were picked.
     pub contours: Vec<SessionContour>,
+    /// The slices shown (none: no slice).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slices: Option<SessionSlices>,
+    /// The clipping plane (none: no cut).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clip: Option<SessionClip>,
+    /// The 3D view's switches (none: their defaults).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<SessionView>,
+}
+
+/// The grid index of each slice shown; an axis left out shows none.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SessionSlices {
+    /// The slice normal to x.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x: Option<usize>,
+    /// The slice normal to y.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub y: Option<usize>,
+    /// The slice normal to z.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<usize>,
+}
+
+impl SessionSlices {
+    /// Per axis (x, y, z).
+    pub fn as_array(&self) -> [Option<usize>; 3] {
+        [self.x, self.y, self.z]
+    }
+
+    /// From per-axis indices.
+    pub fn from_array([x, y, z]: [Option<usize>; 3]) -> Self {
+        SessionSlices { x, y, z }
+    }
+}
+
+/// A clipping plane across one axis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SessionClip {
+    /// `x`, `y` or `z`.
+    pub axis: String,
+    /// Where, as a fraction of the volume's box along the axis (0..=1).
+    pub at: f32,
+    /// `below` or `above`: the side kept.
+    pub keep: String,
+}
+
+impl Default for SessionClip {
+    fn default() -> Self {
+        SessionClip {
+            axis: "y".into(),
+            at: 0.5,
+            keep: "above".into(),
+        }
+    }
+}
+
+impl SessionClip {
+    /// The axis index (0, 1, 2), None for an unknown name.
+    pub fn axis_index(&self) -> Option<usize> {
+        ["x", "y", "z"].iter().position(|a| *a == self.axis)
+    }
+
+    /// Whether the side below `at` is kept (anything but `above`).
+    pub fn keep_below(&self) -> bool {
+        self.keep != "above"
+    }
+}
+
+/// The 3D view's switches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SessionView {
+    /// Contour names drawn beside the contours.
+    pub labels: bool,
+    /// The legend of the visible contours.
+    pub legend: bool,
+    /// The axis triad.
+    pub triad: bool,
+    /// The slice panel is open.
+    pub slices_panel: bool,
+}
+
+impl Default for SessionView {
+    fn default() -> Self {
+        SessionView {
+            labels: false,
+            legend: true,
+            triad: true,
+            slices_panel: false,
+        }
+    }
 }
 
 impl Default for Session {
@@ -146,6 +250,9 @@ impl Default for Session {
             arcs_shown: None,
             camera: None,
             contours: Vec::new(),
+            slices: None,
+            clip: None,
+            view: None,
         }
     }
 }
@@ -394,6 +501,45 @@ mod tests {
         assert_eq!(s.camera, None);
         assert!(s.contours[0].visible);
         assert_eq!(s.contours[0].name, "");
+        assert_eq!((s.slices, s.clip, s.view), (None, None, None));
+    }
+
+    #[test]
+    fn slices_clip_and_view_round_trip_and_partial_ones_take_defaults() {
+        let s = Session {
+            volume: "v.nrrd".into(),
+            slices: Some(SessionSlices::from_array([Some(3), None, Some(7)])),
+            clip: Some(SessionClip {
+                axis: "x".into(),
+                at: 0.25,
+                keep: "below".into(),
+            }),
+            view: Some(SessionView {
+                labels: true,
+                ..SessionView::default()
+            }),
+            ..Session::default()
+        };
+        let json = s.to_json();
+        assert!(
+            !json.contains("\"y\": null"),
+            "absent slices are left out: {json}"
+        );
+        let back = Session::from_json(&json, Path::new("s.json")).expect("a session");
+        assert_eq!(back, s);
+        let partial = Session::from_json(
+            r#"{"format": "flexiso-session", "version": 1, "volume": "v.nrrd",
+                "clip": {"axis": "z"}, "view": {"labels": true}}"#,
+            Path::new("s.json"),
+        )
+        .expect("a session");
+        let clip = partial.clip.expect("a clip");
+        assert_eq!(
+            (clip.axis_index(), clip.at, clip.keep_below()),
+            (Some(2), 0.5, false)
+        );
+        let view = partial.view.expect("view switches");
+        assert!(view.labels && view.legend && view.triad && !view.slices_panel);
     }
 
     #[test]

@@ -1,4 +1,6 @@
-//! Exports as the File menu does them: contour meshes (PLY, OBJ, STL),
+//! Exports as the File menu does them: contour meshes (PLY with each
+//! contour's colour per vertex, OBJ with a `.mtl` of the colours, STL,
+//! VTP), on request with a session beside them (`NAME.session.json`),
 //! the tree as JSON, the 3D view as PNG. What to write is gathered on the
 //! UI thread (cheap: shared meshes, the tree's `Arc`s), the writing runs
 //! as a job ([`super::jobs::export`]), its outcome lands in the info line.
@@ -14,7 +16,13 @@ impl FlexisoApp {
     /// Writes the visible selected contours (or, with none selected, the
     /// contours at h shown) to a mesh file.
     pub fn export_contours(&self, path: &std::path::Path) -> anyhow::Result<usize> {
-        self.contour_export(path)?()
+        Ok(self.contour_export(path)?()?.0)
+    }
+
+    /// Where the session written beside exported meshes goes:
+    /// `NAME.session.json` for `NAME.ply`.
+    pub fn session_beside(mesh_path: &std::path::Path) -> PathBuf {
+        mesh_path.with_extension("session.json")
     }
 
     /// What [`FlexisoApp::export_contours`] writes, gathered (cheaply, on
@@ -22,30 +30,61 @@ impl FlexisoApp {
     fn contour_export(
         &self,
         path: &std::path::Path,
-    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<usize> + Send + 'static> {
+    ) -> anyhow::Result<impl FnOnce() -> anyhow::Result<(usize, Vec<PathBuf>)> + Send + 'static>
+    {
         let mut meshes: Vec<Arc<ContourMesh>> = Vec::new();
         let mut names = Vec::new();
+        let mut colours = Vec::new();
         for c in &self.selection.contours {
             if let Some(m) = &c.mesh
                 && self.selection.shown(c)
             {
                 meshes.push(Arc::clone(m));
-                names.push(format!("contour_{}_h{}", c.id, fmt_value(c.h)));
+                // The user's name when given (one word: OBJ and PLY
+                // comments split on spaces), else the contour's number.
+                let name = c.name.split_whitespace().collect::<Vec<_>>().join("_");
+                names.push(if name.is_empty() {
+                    format!("contour_{}_h{}", c.id, fmt_value(c.h))
+                } else {
+                    name
+                });
+                colours.push([c.colour.r(), c.colour.g(), c.colour.b()]);
             }
         }
         if meshes.is_empty() && self.show_all {
             for (i, m) in self.all.meshes.iter().enumerate() {
                 meshes.push(Arc::clone(m));
                 names.push(format!("component_{i}_h{}", fmt_value(self.global_h)));
+                let c = super::selection::palette(i);
+                colours.push([c.r(), c.g(), c.b()]);
             }
         }
         if meshes.is_empty() {
             anyhow::bail!("no contour to export: select one in the tree first");
         }
+        // The session, when asked for, is gathered here (cheap) and
+        // written with the meshes.
+        let session = if self.menu.session_with_export {
+            let p = Self::session_beside(path);
+            Some((
+                self.session(&p)
+                    .ok_or_else(|| anyhow::anyhow!("no volume is open"))?,
+                p,
+            ))
+        } else {
+            None
+        };
         let path = path.to_path_buf();
         Ok(move || {
-            crate::contour::export::write_contours(&path, &meshes, &names)?;
-            Ok(meshes.len())
+            let mut files = crate::contour::export::write_contours_coloured(
+                &path, &meshes, &names, &colours, "",
+            )?;
+            if let Some((s, p)) = session {
+                s.write(&p)
+                    .map_err(|e| anyhow::anyhow!("the session beside the meshes: {e}"))?;
+                files.push(p);
+            }
+            Ok((meshes.len(), files))
         })
     }
 
@@ -93,7 +132,23 @@ impl FlexisoApp {
     pub fn start_contour_export(&mut self, p: PathBuf) {
         match self.contour_export(&p) {
             Ok(write) => self.export_in_background(move || match write() {
-                Ok(n) => Ok(format!("wrote {n} contour(s) to {}", p.display())),
+                Ok((n, files)) => {
+                    let others: Vec<String> = files
+                        .iter()
+                        .filter(|f| **f != p)
+                        .map(|f| f.display().to_string())
+                        .collect();
+                    let also = if others.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (and {})", others.join(", "))
+                    };
+                    Ok(format!(
+                        "wrote {n} contour{} to {}{also}",
+                        if n == 1 { "" } else { "s" },
+                        p.display()
+                    ))
+                }
                 Err(e) => Err(format!("{e:#}")),
             }),
             Err(e) => self.error = Some(format!("{e:#}")),
@@ -151,11 +206,20 @@ impl FlexisoApp {
         let image = rs
             .ok_or_else(|| anyhow::anyhow!("no GPU render state"))
             .and_then(|rs| self.view3d.read_image(rs));
+        // The legend as the view shows it (View > Legend).
+        let legend = if self.menu.view.legend {
+            self.legend_entries()
+        } else {
+            Vec::new()
+        };
         match image {
             // PNG encoding takes tens of milliseconds: not on this thread.
-            Ok(img) => self.export_in_background(move || match img.save(&path) {
-                Ok(()) => Ok(format!("saved {}", path.display())),
-                Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
+            Ok(mut img) => self.export_in_background(move || {
+                crate::render::overlay::draw_legend(&mut img, &legend);
+                match img.save(&path) {
+                    Ok(()) => Ok(format!("saved {}", path.display())),
+                    Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
+                }
             }),
             Err(e) => self.error = Some(format!("screenshot: {e:#}")),
         }

@@ -20,6 +20,7 @@
 //! changing the measure (background jobs) and moving a contour's isovalue
 //! (one contour, a few ms) compute.
 
+pub mod context;
 pub mod dataset;
 pub mod exports;
 pub mod format;
@@ -120,6 +121,8 @@ pub struct FlexisoApp {
     recovery_offer: Option<crate::session::Session>,
     /// The session being shown was recovered (saved nowhere).
     recovered: bool,
+    /// Slices and the clipping plane (see [`context`]).
+    slices: panels::slices::SlicePanel,
 }
 
 impl FlexisoApp {
@@ -161,6 +164,7 @@ impl FlexisoApp {
             recovery: None,
             recovery_offer: None,
             recovered: false,
+            slices: Default::default(),
         }
     }
 
@@ -480,6 +484,7 @@ impl FlexisoApp {
             Action::ClearContours => self.selection.clear(),
             Action::SaveSession => self.save_session_here_or_ask(),
             Action::Quit => self.request(session::Pending::Quit),
+            Action::Preset(p) => self.set_view_preset(p),
         }
     }
 
@@ -610,6 +615,17 @@ impl FlexisoApp {
         if self.show_all {
             let faded = !self.selection.contours.is_empty();
             for (i, m) in self.all.gpu.iter().enumerate() {
+                // A selected contour at h is this very surface: its faded
+                // copy would stay (and catch clicks) after it is hidden.
+                let arc = self.all.meshes.get(i).map(|m| m.arc);
+                if self
+                    .selection
+                    .contours
+                    .iter()
+                    .any(|c| Some(c.superarc) == arc && c.h == self.global_h)
+                {
+                    continue;
+                }
                 let c = palette(i);
                 scene.push(SceneMesh {
                     key: SceneKey::AtH(i),
@@ -758,7 +774,9 @@ impl eframe::App for FlexisoApp {
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| {
+                self.slice_panel(ui);
                 view_rect = ui.available_rect_before_wrap();
+                self.update_context();
                 let scene = self.scene();
                 let ev = self.view3d.ui(ui, rs.as_ref(), &scene);
                 if let Some((key, shift)) = ev.picked {

@@ -13,7 +13,9 @@ use super::FlexisoApp;
 use super::history::Scene;
 use super::ids::ContourId;
 use super::selection::{ContourState, palette};
-use crate::session::{CameraState, Session, SessionContour, format_colour};
+use crate::session::{
+    CameraState, Session, SessionClip, SessionContour, SessionSlices, SessionView, format_colour,
+};
 
 /// The recovery file is written once the scene has stayed changed this
 /// long.
@@ -90,8 +92,76 @@ impl FlexisoApp {
                 fov_y: c.fov_y,
             }),
             contours,
+            slices: {
+                let sl = &self.slices.slices;
+                let a: [Option<usize>; 3] =
+                    std::array::from_fn(|i| sl.on[i].then_some(sl.index[i]));
+                a.iter()
+                    .any(Option::is_some)
+                    .then(|| SessionSlices::from_array(a))
+            },
+            clip: {
+                let c = &self.slices.clip;
+                c.on.then(|| SessionClip {
+                    axis: ["x", "y", "z"][c.axis.min(2)].into(),
+                    at: c.at,
+                    keep: if c.keep_below { "below" } else { "above" }.into(),
+                })
+            },
+            view: {
+                let v = self.menu.view;
+                Some(SessionView {
+                    labels: v.labels,
+                    legend: v.legend,
+                    triad: v.triad,
+                    slices_panel: v.slices_panel,
+                })
+            },
             ..Session::default()
         })
+    }
+
+    /// Shows the session's slices, clip and view switches (view state:
+    /// absent ones are switched off or take their defaults).
+    fn apply_view_state(&mut self, s: &Session) {
+        if let Some(ds) = &self.dataset {
+            self.slices.set_field(&ds.field);
+        }
+        let slices = s.slices.unwrap_or_default().as_array();
+        for (a, i) in slices.iter().enumerate() {
+            self.slices.slices.on[a] = i.is_some();
+            if let Some(i) = i {
+                self.slices.slices.index[a] = *i;
+            }
+        }
+        let clip = &mut self.slices.clip;
+        clip.on = false;
+        if let Some(c) = &s.clip {
+            match c.axis_index() {
+                Some(axis) => {
+                    clip.on = true;
+                    clip.axis = axis;
+                    clip.at = if c.at.is_finite() {
+                        c.at.clamp(0.0, 1.0)
+                    } else {
+                        0.5
+                    };
+                    clip.keep_below = c.keep_below();
+                }
+                None => {
+                    self.error = Some(format!(
+                        "session: clip axis '{}' is not x, y or z; no clipping plane",
+                        c.axis
+                    ))
+                }
+            }
+        }
+        let v = s.view.unwrap_or_default();
+        let view = &mut self.menu.view;
+        view.labels = v.labels;
+        view.legend = v.legend;
+        view.triad = v.triad;
+        view.slices_panel = v.slices_panel;
     }
 
     /// Saves the session to `path`; the error is shown and returned.
@@ -200,6 +270,7 @@ impl FlexisoApp {
             cam.pitch = c.pitch;
             cam.fov_y = c.fov_y;
         }
+        self.apply_view_state(s);
         let n = placed.contours.len();
         self.info = Some(if placed.problems.is_empty() {
             format!("session opened: {n} contours")
@@ -217,6 +288,12 @@ impl FlexisoApp {
             // A recovered scene is saved nowhere yet.
             self.history.forget_saved();
         }
+    }
+
+    /// Shows session `s` on the volume shown, whatever volume it names
+    /// (tests: a field made in the test has no file to name).
+    pub fn apply_session_for_test(&mut self, s: &Session) {
+        self.apply_session(s);
     }
 
     /// Opens a volume, asking first when the scene has unsaved changes.

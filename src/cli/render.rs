@@ -6,7 +6,9 @@
 //! superarc at `--iso` (default: the middle of the arc's value range);
 //! otherwise every contour at `--iso` (default: the middle of the value
 //! range), each in its own colour. With `--session S.json`, the session's
-//! visible contours in their colours, from its camera: the explorer's
+//! visible contours in their colours, from its camera, with its slices
+//! and clipping plane and a legend of the contours' names (unless the
+//! session's view switches it off, or `--no-legend`): the explorer's
 //! picture of that scene.
 
 use std::path::PathBuf;
@@ -49,6 +51,9 @@ pub struct Args {
     /// --arc do not apply; its camera replaces --yaw and --pitch).
     #[arg(long, value_name = "JSON", conflicts_with_all = ["iso", "arc"])]
     pub session: Option<PathBuf>,
+    /// Leave out the legend a session's picture carries.
+    #[arg(long)]
+    pub no_legend: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -96,6 +101,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     let (lo, hi) = field.range();
     let mut colours = Vec::new();
+    let mut names = Vec::new();
     let surfaces = if let Some((s, _)) = &session {
         let placed = s.place(&tree, field);
         for p in &placed.problems {
@@ -115,6 +121,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             surfaces.push(surface(
                 contour::ContourFollower::new(field).follow(&seed, iso),
             ));
+            names.push(if c.name.trim().is_empty() {
+                format!("contour {i}")
+            } else {
+                c.name.clone()
+            });
             colours.push(match c.colour {
                 Some(rgb) => rgb.map(|v| f32::from(v) / 255.0),
                 None => {
@@ -183,8 +194,70 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         camera.pitch = c.pitch;
         camera.fov_y = c.fov_y;
     }
-    let img = crate::render::render_to_image(&meshes, Some(bounds), Some(&camera), width, height)
-        .context("rendering failed")?;
+    let mut scene = crate::render::HeadlessScene {
+        meshes,
+        bounds: Some(bounds),
+        camera: Some(camera),
+        ..Default::default()
+    };
+    let mut legend = Vec::new();
+    if let Some((s, _)) = &session {
+        let rgb = |i: usize| {
+            let [r, g, b, _] = scene.meshes[i].colour;
+            [r, g, b].map(|c| (c * 255.0).round() as u8)
+        };
+        let spacing = field.spacing();
+        for (axis, index) in s.slices.unwrap_or_default().as_array().iter().enumerate() {
+            let Some(index) = *index else { continue };
+            let slice = crate::field::slice::Slice::of(field, axis, index);
+            let at = slice.position(spacing);
+            let segments: Vec<Vec<[[f32; 2]; 2]>> = surfaces
+                .iter()
+                .map(|m| contour::section::axis_section(&m.positions, &m.indices, axis, at))
+                .collect();
+            let sections: Vec<crate::render::overlay::Section<'_>> = segments
+                .iter()
+                .enumerate()
+                .map(|(i, segs)| crate::render::overlay::Section {
+                    segments: segs,
+                    colour: rgb(i),
+                })
+                .collect();
+            let longest = slice.width.max(slice.height).max(1);
+            let upscale = 512usize.div_ceil(longest).clamp(1, 4) as u32;
+            let image = crate::render::overlay::slice_image(
+                &slice,
+                spacing,
+                upscale,
+                &sections,
+                (upscale as f32).max(2.0),
+            );
+            scene.slices.push(crate::render::SliceQuad {
+                corners: slice.corners(spacing),
+                image: std::sync::Arc::new(image),
+            });
+        }
+        if let Some(c) = &s.clip {
+            let axis = c
+                .axis_index()
+                .with_context(|| format!("session: clip axis '{}' is not x, y or z", c.axis))?;
+            let at = bounds.0[axis] + c.at.clamp(0.0, 1.0) * (bounds.1[axis] - bounds.0[axis]);
+            scene.clip = Some(crate::render::ClipPlane::axis(axis, at, c.keep_below()));
+        }
+        if !args.no_legend && s.view.unwrap_or_default().legend {
+            legend = names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| crate::render::overlay::LegendEntry {
+                    name: n.clone(),
+                    colour: rgb(i),
+                })
+                .collect();
+        }
+    }
+    let mut img =
+        crate::render::render_scene_to_image(&scene, width, height).context("rendering failed")?;
+    crate::render::overlay::draw_legend(&mut img, &legend);
     if super::is_stdio(&args.out) {
         let mut png = Vec::new();
         img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)

@@ -273,6 +273,18 @@ pub fn write_ply(
     names: &[String],
     note: &str,
 ) -> io::Result<()> {
+    write_ply_coloured(w, contours, names, &[], note)
+}
+
+/// [`write_ply`] with contour `i` in `colours[i]` (sRGB; contours past
+/// the end take the default colours).
+pub fn write_ply_coloured(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    colours: &[[u8; 3]],
+    note: &str,
+) -> io::Result<()> {
     let nv: usize = contours.iter().map(|c| c.borrow().positions.len()).sum();
     let nf: usize = contours.iter().map(|c| c.borrow().num_triangles()).sum();
     let mut comments = String::new();
@@ -297,7 +309,10 @@ pub fn write_ply(
     )?;
     for (i, c) in contours.iter().enumerate() {
         let c = c.borrow();
-        let colour = COLOURS[i % COLOURS.len()];
+        let colour = colours
+            .get(i)
+            .copied()
+            .unwrap_or(COLOURS[i % COLOURS.len()]);
         for (p, n) in c.positions.iter().zip(&c.normals) {
             for x in p.iter().chain(n) {
                 w.write_all(&x.to_le_bytes())?;
@@ -327,9 +342,25 @@ pub fn write_obj(
     names: &[String],
     note: &str,
 ) -> io::Result<()> {
+    write_obj_with_materials(w, contours, names, None, note)
+}
+
+/// [`write_obj`] that names a material library (`mtllib`) and gives
+/// each object the material of its name (`usemtl`), as
+/// [`write_mtl`] writes them.
+pub fn write_obj_with_materials(
+    w: &mut impl Write,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    mtllib: Option<&str>,
+    note: &str,
+) -> io::Result<()> {
     writeln!(w, "# flexiso contours")?;
     if !note.is_empty() {
         writeln!(w, "# {note}")?;
+    }
+    if let Some(lib) = mtllib {
+        writeln!(w, "mtllib {lib}")?;
     }
     let mut base = 1usize;
     for (i, c) in contours.iter().enumerate() {
@@ -339,6 +370,9 @@ pub fn write_obj(
             .cloned()
             .unwrap_or_else(|| format!("contour_{i}"));
         writeln!(w, "o {name}")?;
+        if mtllib.is_some() {
+            writeln!(w, "usemtl {}", material_name(&name))?;
+        }
         for p in &c.positions {
             writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
         }
@@ -391,4 +425,129 @@ pub fn write_stl(
         }
     }
     Ok(())
+}
+
+/// The material name of an object: its name without whitespace (MTL
+/// names are one word).
+fn material_name(name: &str) -> String {
+    name.split_whitespace().collect::<Vec<_>>().join("_")
+}
+
+/// A Wavefront material library: one diffuse (`Kd`) material per
+/// contour, named as [`write_obj_with_materials`] uses them.
+pub fn write_mtl(w: &mut impl Write, names: &[String], colours: &[[u8; 3]]) -> io::Result<()> {
+    writeln!(w, "# flexiso contour colours")?;
+    for (i, name) in names.iter().enumerate() {
+        let [r, g, b] = colours
+            .get(i)
+            .copied()
+            .unwrap_or(COLOURS[i % COLOURS.len()])
+            .map(|c| f32::from(c) / 255.0);
+        writeln!(
+            w,
+            "newmtl {}\nKa 0 0 0\nKd {r:.4} {g:.4} {b:.4}\nKs 0.1 0.1 0.1\nNs 20\nd 1\nillum 2\n",
+            material_name(name)
+        )?;
+    }
+    Ok(())
+}
+
+/// [`write_contours_noting`] keeping each contour's colour: PLY vertices
+/// carry `colours[i]`; OBJ names a material library written beside it
+/// (the same stem, `.mtl`), one material per contour. Other formats carry
+/// no colour and are written as by [`write_contours_noting`]. Returns the
+/// files written.
+pub fn write_contours_coloured(
+    path: &Path,
+    contours: &[impl Borrow<ContourMesh>],
+    names: &[String],
+    colours: &[[u8; 3]],
+    note: &str,
+) -> Result<Vec<std::path::PathBuf>, ExportError> {
+    let format = MeshFormat::from_path(path).ok_or_else(|| ExportError::UnknownFormat {
+        path: path.display().to_string(),
+    })?;
+    let note: String = note.chars().filter(|c| !c.is_control()).collect();
+    let write = |p: &Path, f: &dyn Fn(&mut BufWriter<std::fs::File>) -> io::Result<()>| {
+        let io_err = |error| ExportError::Io {
+            path: p.display().to_string(),
+            error,
+        };
+        let mut w = BufWriter::new(std::fs::File::create(p).map_err(io_err)?);
+        f(&mut w).and_then(|_| w.flush()).map_err(io_err)
+    };
+    match format {
+        MeshFormat::Ply => {
+            write(path, &|w| {
+                write_ply_coloured(w, contours, names, colours, &note)
+            })?;
+            Ok(vec![path.to_path_buf()])
+        }
+        MeshFormat::Obj => {
+            let mtl = path.with_extension("mtl");
+            let lib = mtl
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "contours.mtl".into());
+            write(&mtl, &|w| write_mtl(w, names, colours))?;
+            write(path, &|w| {
+                write_obj_with_materials(w, contours, names, Some(&lib), &note)
+            })?;
+            Ok(vec![path.to_path_buf(), mtl])
+        }
+        _ => {
+            write_contours_as(path, format, contours, names, &note)?;
+            Ok(vec![path.to_path_buf()])
+        }
+    }
+}
+
+#[cfg(test)]
+mod coloured_tests {
+    use super::*;
+
+    fn triangle() -> ContourMesh {
+        ContourMesh {
+            arc: crate::tree::ArcId(0),
+            positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            normals: vec![[0.0, 0.0, 1.0]; 3],
+            indices: vec![0, 1, 2],
+            touches_boundary: true,
+        }
+    }
+
+    #[test]
+    fn obj_names_its_materials_and_the_mtl_holds_each_colour() {
+        let dir = tempfile::tempdir().expect("a temp dir");
+        let path = dir.path().join("two.obj");
+        let names = vec!["brain".to_string(), "left eye".to_string()];
+        let written = write_contours_coloured(
+            &path,
+            &[triangle(), triangle()],
+            &names,
+            &[[255, 0, 0], [0, 128, 255]],
+            "",
+        )
+        .expect("written");
+        assert_eq!(written.len(), 2);
+        let obj = std::fs::read_to_string(&path).expect("obj");
+        assert!(obj.contains("mtllib two.mtl"));
+        assert!(obj.contains("usemtl brain") && obj.contains("usemtl left_eye"));
+        let mtl = std::fs::read_to_string(dir.path().join("two.mtl")).expect("mtl");
+        assert!(mtl.contains("newmtl brain\nKa 0 0 0\nKd 1.0000 0.0000 0.0000"));
+        assert!(mtl.contains("newmtl left_eye\nKa 0 0 0\nKd 0.0000 0.5020 1.0000"));
+    }
+
+    #[test]
+    fn ply_vertices_carry_the_colours_given() {
+        let mut out = Vec::new();
+        write_ply_coloured(&mut out, &[triangle()], &[], &[[1, 2, 3]], "").expect("written");
+        let body = &out[out
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .expect("header")
+            + 11..];
+        // x y z nx ny nz (24 bytes), then red green blue.
+        assert_eq!(&body[24..27], &[1, 2, 3]);
+    }
 }

@@ -49,6 +49,7 @@ pub mod global;
 pub mod marching;
 #[doc(hidden)]
 pub mod oracle;
+pub mod section;
 pub mod seed;
 mod sweep;
 pub mod topology;

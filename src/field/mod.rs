@@ -14,6 +14,7 @@
 mod geometry;
 pub mod io;
 mod order;
+pub mod slice;
 pub mod source;
 pub mod synthetic;
 

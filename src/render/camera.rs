@@ -14,6 +14,76 @@ use glam::{Mat4, Vec2, Vec3};
 /// The largest pitch, just short of the poles where the view would flip.
 const MAX_PITCH: f32 = 89.0 * std::f32::consts::PI / 180.0;
 
+/// A standard view along one of the volume's axes. The medical names
+/// follow the usual layout of a head volume (slices stacked along z,
+/// y front to back, x left to right): axial looks down the z axis (from
+/// +z), coronal along y (from −y), sagittal along x (from +x). Which
+/// anatomical side that is depends on the file's orientation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewPreset {
+    /// From +z, looking down, +y up on screen.
+    Axial,
+    /// From −y, +z up.
+    Coronal,
+    /// From +x, +z up.
+    Sagittal,
+    /// From +x (eye on the +x side, looking towards −x).
+    PlusX,
+    /// From −x.
+    MinusX,
+    /// From +y.
+    PlusY,
+    /// From −y.
+    MinusY,
+    /// From +z (above).
+    PlusZ,
+    /// From −z (below).
+    MinusZ,
+}
+
+impl ViewPreset {
+    /// Every preset, in menu order.
+    pub const ALL: [ViewPreset; 9] = [
+        ViewPreset::Axial,
+        ViewPreset::Coronal,
+        ViewPreset::Sagittal,
+        ViewPreset::PlusX,
+        ViewPreset::MinusX,
+        ViewPreset::PlusY,
+        ViewPreset::MinusY,
+        ViewPreset::PlusZ,
+        ViewPreset::MinusZ,
+    ];
+
+    /// The name shown in menus.
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewPreset::Axial => "Axial (along z)",
+            ViewPreset::Coronal => "Coronal (along y)",
+            ViewPreset::Sagittal => "Sagittal (along x)",
+            ViewPreset::PlusX => "From +x",
+            ViewPreset::MinusX => "From −x",
+            ViewPreset::PlusY => "From +y",
+            ViewPreset::MinusY => "From −y",
+            ViewPreset::PlusZ => "From +z",
+            ViewPreset::MinusZ => "From −z",
+        }
+    }
+
+    /// `(yaw, pitch)` of the eye, radians.
+    pub fn angles(self) -> (f32, f32) {
+        use std::f32::consts::{FRAC_PI_2, PI};
+        match self {
+            ViewPreset::PlusX | ViewPreset::Sagittal => (0.0, 0.0),
+            ViewPreset::MinusX => (PI, 0.0),
+            ViewPreset::PlusY => (FRAC_PI_2, 0.0),
+            ViewPreset::MinusY | ViewPreset::Coronal => (-FRAC_PI_2, 0.0),
+            ViewPreset::PlusZ | ViewPreset::Axial => (-FRAC_PI_2, MAX_PITCH),
+            ViewPreset::MinusZ => (-FRAC_PI_2, -MAX_PITCH),
+        }
+    }
+}
+
 /// An orbit camera (see the module doc for the conventions).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
@@ -69,6 +139,21 @@ impl Camera {
         // The sphere fits the vertical field of view; a wide viewport only
         // adds margin at the sides. 5% margin.
         self.distance = 1.05 * radius / (0.5 * self.fov_y).sin();
+    }
+
+    /// Looks along a standard axis ([`ViewPreset`]), keeping the target
+    /// and the distance. (Straight down the z axis is 89°: the orbit
+    /// keeps off the poles.)
+    pub fn set_preset(&mut self, preset: ViewPreset) {
+        let (yaw, pitch) = preset.angles();
+        self.yaw = yaw.rem_euclid(std::f32::consts::TAU);
+        self.pitch = pitch;
+    }
+
+    /// The world directions that point right and up on screen (unit
+    /// vectors), e.g. to draw an axis triad.
+    pub fn screen_axes(&self) -> (Vec3, Vec3) {
+        self.right_up()
     }
 
     /// Rotates around the target: `dx` radians of yaw, `dy` radians of pitch
@@ -159,6 +244,32 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn presets_look_along_their_axes() {
+        let mut c = Camera::default();
+        c.fit([0.0; 3], [2.0; 3]);
+        let along = |c: &Camera| (c.target - c.eye()).normalize();
+        for (p, d) in [
+            (ViewPreset::PlusX, Vec3::NEG_X),
+            (ViewPreset::MinusX, Vec3::X),
+            (ViewPreset::PlusY, Vec3::NEG_Y),
+            (ViewPreset::Coronal, Vec3::Y),
+            (ViewPreset::Axial, Vec3::NEG_Z),
+            (ViewPreset::MinusZ, Vec3::Z),
+        ] {
+            c.set_preset(p);
+            assert!(along(&c).dot(d) > 0.999, "{p:?}: {}", along(&c));
+        }
+        // Axial: +y up on screen, +x to the right.
+        c.set_preset(ViewPreset::Axial);
+        let (right, up) = c.screen_axes();
+        assert!(right.dot(Vec3::X) > 0.99 && up.dot(Vec3::Y) > 0.99);
+        // Coronal: +z up, +x right.
+        c.set_preset(ViewPreset::Coronal);
+        let (right, up) = c.screen_axes();
+        assert!(right.dot(Vec3::X) > 0.99 && up.dot(Vec3::Z) > 0.99);
+    }
 
     #[test]
     fn centre_ray_hits_target_after_fit() {

@@ -2,7 +2,7 @@
 //! Used by `flexiso render` and the render tests; works on software
 //! adapters (Mesa llvmpipe/lavapipe) as well as real GPUs.
 
-use super::{Camera, RenderError, Renderer};
+use super::{Camera, ClipPlane, RenderError, Renderer, SliceQuad};
 
 /// A device of our own, for headless use.
 pub struct Gpu {
@@ -69,6 +69,21 @@ pub struct HeadlessMesh<'a> {
     pub colour: [f32; 4],
 }
 
+/// Everything [`render_scene_to_image`] draws.
+#[derive(Clone, Debug, Default)]
+pub struct HeadlessScene<'a> {
+    /// The meshes.
+    pub meshes: Vec<HeadlessMesh<'a>>,
+    /// The faint volume box.
+    pub bounds: Option<([f32; 3], [f32; 3])>,
+    /// None: the default view fitted to the bounds (or the meshes).
+    pub camera: Option<Camera>,
+    /// Slices, at most [`context::MAX_SLICES`](super::context::MAX_SLICES).
+    pub slices: Vec<SliceQuad>,
+    /// The clipping plane.
+    pub clip: Option<ClipPlane>,
+}
+
 /// Renders `meshes` into a `width × height` image on a GPU of its own.
 /// `bounds` draws the faint volume box; `camera` None fits the default view
 /// to the bounds (or to the meshes when there are none).
@@ -79,9 +94,27 @@ pub fn render_to_image(
     width: u32,
     height: u32,
 ) -> anyhow::Result<image::RgbaImage> {
+    render_scene_to_image(
+        &HeadlessScene {
+            meshes: meshes.to_vec(),
+            bounds,
+            camera: camera.copied(),
+            ..Default::default()
+        },
+        width,
+        height,
+    )
+}
+
+/// Renders `scene` into a `width × height` image on a GPU of its own.
+pub fn render_scene_to_image(
+    scene: &HeadlessScene<'_>,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<image::RgbaImage> {
     let gpu = Gpu::new()?;
     let mut renderer = gpu.renderer();
-    for (i, m) in meshes.iter().enumerate() {
+    for (i, m) in scene.meshes.iter().enumerate() {
         let id = i as u64;
         renderer.set_mesh(
             &gpu.device,
@@ -93,11 +126,16 @@ pub fn render_to_image(
         )?;
         renderer.set_style(id, m.colour, true, false);
     }
+    for (i, q) in scene.slices.iter().enumerate() {
+        renderer.set_slice(i, Some(q.clone()));
+    }
+    renderer.set_clip(scene.clip);
+    let bounds = scene.bounds;
     if let Some((lo, hi)) = bounds {
         renderer.set_bounds(lo, hi);
     }
-    let camera = match camera {
-        Some(c) => *c,
+    let camera = match scene.camera {
+        Some(c) => c,
         None => {
             let mut c = Camera::default();
             if let Some((lo, hi)) = bounds.or_else(|| renderer.visible_bounds()) {

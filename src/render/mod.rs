@@ -54,6 +54,10 @@
 //! - Lighting is two-sided: a headlight with a specular spot, plus a fill
 //!   light from the upper left; the side a normal points away from is
 //!   darker. Normals need not be consistent with the triangle winding.
+//! - Slices ([`SliceQuad`], [`Renderer::set_slice`]) are opaque textured
+//!   quads drawn after the opaque meshes; a [`ClipPlane`]
+//!   ([`Renderer::set_clip`]) cuts every mesh, in the fragment shader and
+//!   in picking (see [`context`]).
 //! - MSAA 4× when [`Renderer::sample_count_for`] says the adapter can.
 //! - Geometry is uploaded only by [`Renderer::set_mesh`] (at once) or by
 //!   [`Renderer::set_prepared_mesh`] + [`Renderer::upload_pending`] (a
@@ -64,15 +68,18 @@
 //!   for the cost.
 
 mod camera;
+pub mod context;
 mod egui_texture;
 pub mod geometry;
 pub mod headless;
+pub mod overlay;
 mod renderer;
 
-pub use camera::Camera;
+pub use camera::{Camera, ViewPreset};
+pub use context::{ClipPlane, SliceQuad};
 pub use egui_texture::EguiTexture;
 pub use geometry::{PreparedMesh, compute_normals, icosphere};
-pub use headless::{Gpu, HeadlessMesh, render_to_image};
+pub use headless::{Gpu, HeadlessMesh, HeadlessScene, render_scene_to_image, render_to_image};
 pub use renderer::{
     COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,
 };

@@ -7,6 +7,7 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
+use super::context::{ClipPlane, MAX_SLICES, SliceQuad, SliceSlot, SliceVertex};
 use super::geometry::{Corners, GpuVertex, PreparedMesh, ray_box};
 use super::{MeshId, RenderError};
 
@@ -62,6 +63,10 @@ struct FrameUniform {
     eye: [f32; 4],
     fill_dir: [f32; 4],
     line_colour: [f32; 4],
+    /// The clipping plane: normal (xyz) and offset (w).
+    clip: [f32; 4],
+    /// x: 1 when the clipping plane is on.
+    clip_on: [f32; 4],
 }
 
 /// Per-mesh uniforms (layout matches `Style` in mesh.wgsl).
@@ -140,6 +145,12 @@ pub struct Renderer {
     transparent_back: wgpu::RenderPipeline,
     transparent_front: wgpu::RenderPipeline,
     lines: wgpu::RenderPipeline,
+    /// Textured quads (slices), opaque and unlit.
+    slice_pipeline: wgpu::RenderPipeline,
+    slice_layout: wgpu::BindGroupLayout,
+    slice_sampler: wgpu::Sampler,
+    slices: [SliceSlot; MAX_SLICES],
+    clip: Option<ClipPlane>,
     frame_buffer: wgpu::Buffer,
     frame_bind: wgpu::BindGroup,
     meshes: BTreeMap<MeshId, Mesh>,
@@ -344,6 +355,83 @@ impl Renderer {
             cache: None,
         });
 
+        let slice_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("flexiso slice"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let slice_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("flexiso slice"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let slice_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("flexiso slice.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/slice.wgsl").into()),
+        });
+        let slice_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("flexiso slice"),
+                bind_group_layouts: &[Some(&frame_layout), Some(&slice_layout)],
+                immediate_size: 0,
+            });
+        let slice_attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2];
+        let slice_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("flexiso slices"),
+            layout: Some(&slice_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &slice_shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<SliceVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &slice_attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &slice_shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOUR_FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+
         Renderer {
             sample_count,
             style_layout,
@@ -351,6 +439,11 @@ impl Renderer {
             transparent_back,
             transparent_front,
             lines,
+            slice_pipeline,
+            slice_layout,
+            slice_sampler,
+            slices: Default::default(),
+            clip: None,
             frame_buffer,
             frame_bind,
             meshes: BTreeMap::new(),
@@ -687,6 +780,36 @@ impl Renderer {
         }
     }
 
+    /// Cuts every mesh with `clip` (None: no cut). Picking follows.
+    pub fn set_clip(&mut self, clip: Option<ClipPlane>) {
+        if self.clip != clip {
+            self.clip = clip;
+            self.scene_version += 1;
+        }
+    }
+
+    /// The clipping plane in use.
+    pub fn clip(&self) -> Option<ClipPlane> {
+        self.clip
+    }
+
+    /// Shows `quad` in slot `slot` (`0..MAX_SLICES`; others are ignored),
+    /// or nothing there with None. The image is uploaded at the next
+    /// render (into the old texture when it has the same size): call this
+    /// only when the slice changed.
+    pub fn set_slice(&mut self, slot: usize, quad: Option<SliceQuad>) {
+        if let Some(s) = self.slices.get_mut(slot) {
+            s.quad = quad;
+            s.dirty = true;
+            self.scene_version += 1;
+        }
+    }
+
+    /// The quad in slot `slot`, if any.
+    pub fn slice(&self, slot: usize) -> Option<&SliceQuad> {
+        self.slices.get(slot).and_then(|s| s.quad.as_ref())
+    }
+
     /// Renders the scene from `camera` into the renderer's own
     /// `width × height` textures (recreated when the size changes; sizes are
     /// clamped to `1..=max_texture_dimension_2d`) and submits the work to
@@ -740,6 +863,8 @@ impl Renderer {
             eye: eye.extend(1.0).to_array(),
             fill_dir: fill.extend(0.0).to_array(),
             line_colour: LINE_COLOUR,
+            clip: self.clip.map_or([0.0; 4], |c| c.as_vec4()),
+            clip_on: [f32::from(u8::from(self.clip.is_some())), 0.0, 0.0, 0.0],
         };
         queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
 
@@ -759,6 +884,9 @@ impl Renderer {
             };
             queue.write_buffer(&mesh.style_buffer, 0, bytemuck::bytes_of(&uniform));
             mesh.style_dirty = false;
+        }
+        for s in &mut self.slices {
+            s.upload(device, queue, &self.slice_layout, &self.slice_sampler);
         }
         if let Some(b) = &mut self.bounds
             && b.buffers.is_none()
@@ -835,6 +963,14 @@ impl Renderer {
         pass.set_pipeline(&self.opaque);
         for m in opaque {
             draw(&mut pass, m);
+        }
+        pass.set_pipeline(&self.slice_pipeline);
+        for s in &self.slices {
+            if let (Some(g), Some(_)) = (&s.gpu, &s.quad) {
+                pass.set_bind_group(1, &g.bind, &[]);
+                pass.set_vertex_buffer(0, g.vertices.slice(..));
+                pass.draw(0..6, 0..1);
+            }
         }
         if let Some(BoundsLines {
             buffers: Some((vb, ib)),
@@ -928,7 +1064,9 @@ impl Renderer {
     /// viewport (origin top-left, any unit as long as all four agree) seen
     /// from `camera`: its id and the world position hit. Casts a ray on the
     /// CPU against the stored triangles, skipping meshes whose bounding box
-    /// the ray misses or enters beyond the nearest hit so far.
+    /// the ray misses or enters beyond the nearest hit so far. Hidden
+    /// meshes, what the clipping plane cuts away and what lies behind a
+    /// slice are not hit.
     pub fn pick(
         &self,
         camera: &Camera,
@@ -941,7 +1079,23 @@ impl Renderer {
             return None;
         }
         let ndc = [2.0 * x / width - 1.0, 1.0 - 2.0 * y / height];
-        let (origin, dir) = camera.ray(ndc, width / height);
+        let (eye, dir) = camera.ray(ndc, width / height);
+        // Only the part of the ray on the clip's kept side, in front of
+        // the nearest slice, can hit: cast from where that part begins.
+        let (t0, mut t1) = match &self.clip {
+            Some(c) => c.kept_interval(eye, dir)?,
+            None => (0.0, f32::INFINITY),
+        };
+        for s in self.slices.iter().filter_map(|s| s.quad.as_ref()) {
+            if let Some(t) = s.ray_hit(eye, dir) {
+                t1 = t1.min(t);
+            }
+        }
+        if t1 <= t0 {
+            return None;
+        }
+        let origin = eye + t0 * dir;
+        let t1 = t1 - t0;
         let mut candidates: Vec<(f32, MeshId, &Mesh)> = self
             .meshes
             .iter()
@@ -950,6 +1104,7 @@ impl Renderer {
                 ray_box(origin, dir, m.cpu.bbox.0, m.cpu.bbox.1).map(|t| (t, id, m))
             })
             .collect();
+        candidates.retain(|c| c.0 <= t1);
         candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut best: Option<(f32, MeshId, Vec3)> = None;
         for (enter, id, m) in candidates {
@@ -962,7 +1117,8 @@ impl Renderer {
                 best = Some((t, id, p));
             }
         }
-        best.map(|(_, id, p)| (id, p.to_array()))
+        best.filter(|(t, _, _)| *t <= t1)
+            .map(|(_, id, p)| (id, p.to_array()))
     }
 
     /// The world-to-clip matrix the last render used for a `width × height`

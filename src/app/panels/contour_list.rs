@@ -59,7 +59,7 @@ pub fn ui(
                 ))
                 .show(ui, |ui| {
                     ui.horizontal(|ui| {
-                        ui.color_edit_button_srgba(&mut c.colour);
+                        super::colour::colour_button(ui, &mut c.colour);
                         let arc = tree.map(|t| {
                             let a = t.arc(c.superarc);
                             format!("{}:{}", t.node(a.upper).vertex, t.node(a.lower).vertex)

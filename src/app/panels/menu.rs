@@ -1,4 +1,4 @@
-//! The menu bar (File, Help, measure, isovalue, "all contours at h"), the
+//! The menu bar (File, Edit, View, Help, measure, isovalue, "all contours at h"), the
 //! "Open a path" window and the status bar. They edit only what they are
 //! handed and return what the user asked for as [`Action`]s; the app
 //! carries them out.
@@ -9,6 +9,7 @@ use crate::app::dataset::Dataset;
 use crate::app::format::fmt_value;
 use crate::app::jobs::Running;
 use crate::app::jobs::dialog::DialogKind;
+use crate::render::ViewPreset;
 use crate::simplify::{Measure, SimplifiedTree};
 
 /// The controls, as the Help menu shows them.
@@ -23,7 +24,9 @@ Curve: drag on it, or the slider, to simplify the tree (log-log: arcs \
 against feature size).
 3D view: drag rotates, wheel zooms, right or middle drag pans, \
 double-click fits the contours (again: the volume); click a surface to \
-pick it.
+pick it. View > presets look along an axis; View > Slices and clipping \
+shows three slices of the volume (grey values, each contour's \
+cross-section in its colour) and a plane that cuts every contour.
 Keys: Ctrl+O opens, Ctrl+S saves the session, Ctrl+Z undoes, \
 Ctrl+Shift+Z or Ctrl+Y redoes, Delete removes the active contour, Escape \
 closes a popup or cancels a drag (Edit > Clear contours clears). Drop a \
@@ -52,6 +55,33 @@ pub enum Action {
     SaveSession,
     /// Close the window (asking first when there are unsaved changes).
     Quit,
+    /// Look along a standard axis.
+    Preset(ViewPreset),
+}
+
+/// What the 3D view shows besides the contours (the View menu's
+/// switches).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ViewOptions {
+    /// The slice panel (slices and clipping) is open.
+    pub slices_panel: bool,
+    /// Contour names beside the contours.
+    pub labels: bool,
+    /// The legend of the visible contours (also in PNG exports).
+    pub legend: bool,
+    /// The axis triad.
+    pub triad: bool,
+}
+
+impl Default for ViewOptions {
+    fn default() -> Self {
+        ViewOptions {
+            slices_panel: false,
+            labels: false,
+            legend: true,
+            triad: true,
+        }
+    }
 }
 
 /// What the Edit menu offers, set by the app each frame.
@@ -75,6 +105,10 @@ pub struct Menu {
     pub all_checkbox: Option<egui::Rect>,
     /// The Edit menu's entries.
     pub edit: EditState,
+    /// The View menu's switches.
+    pub view: ViewOptions,
+    /// File > Export contours also writes a session beside the meshes.
+    pub session_with_export: bool,
 }
 
 impl Menu {
@@ -113,9 +147,13 @@ impl Menu {
                     actions.push(Action::Dialog(DialogKind::SaveSession));
                 }
                 ui.separator();
-                if ui.button("Export contours (PLY/OBJ/STL)…").clicked() {
+                if ui.button("Export contours (PLY/OBJ/STL/VTP)…").clicked() {
                     actions.push(Action::Dialog(DialogKind::ExportContours));
                 }
+                ui.checkbox(
+                    &mut self.session_with_export,
+                    "…and a session beside the meshes",
+                );
                 if ui.button("Save 3D view as PNG…").clicked() {
                     actions.push(Action::Dialog(DialogKind::Screenshot));
                 }
@@ -156,6 +194,22 @@ impl Menu {
                 {
                     actions.push(Action::ClearContours);
                 }
+            });
+            ui.menu_button("View", |ui| {
+                for p in ViewPreset::ALL {
+                    if ui.button(p.name()).clicked() {
+                        actions.push(Action::Preset(p));
+                    }
+                    if p == ViewPreset::Sagittal {
+                        ui.separator();
+                    }
+                }
+                ui.separator();
+                let v = &mut self.view;
+                ui.checkbox(&mut v.slices_panel, "Slices and clipping");
+                ui.checkbox(&mut v.labels, "Contour names in the view");
+                ui.checkbox(&mut v.legend, "Legend (also in PNG exports)");
+                ui.checkbox(&mut v.triad, "Axis triad");
             });
             ui.menu_button("Help", |ui| {
                 ui.label(CONTROLS);

@@ -12,7 +12,10 @@ use std::sync::Arc;
 use egui::{Color32, Sense};
 
 use crate::app::ids::ContourId;
-use crate::render::{Camera, EguiTexture, MeshId, PreparedMesh, Renderer};
+use crate::render::overlay::LegendEntry;
+use crate::render::{
+    Camera, ClipPlane, EguiTexture, MeshId, PreparedMesh, Renderer, SliceQuad, ViewPreset,
+};
 
 /// What a mesh of the scene is, as the explorer names it; the view gives
 /// each its own renderer [`MeshId`].
@@ -77,6 +80,40 @@ pub struct View3d {
     pub renders: u64,
     /// The last double-click fitted the contours (the next fits the box).
     fitted_to_contours: bool,
+    /// Context and annotations (see [`ViewContext`]).
+    pub context: ViewContext,
+    /// The slice versions the renderer holds.
+    slices_set: [u64; 3],
+    /// Where the view was drawn last frame (tests, scripts).
+    pub rect: Option<egui::Rect>,
+}
+
+/// What the view shows besides the meshes: slices, the clipping plane,
+/// labels, the legend and the axis triad. Set by the app each frame;
+/// the renderer is told only what changed.
+#[derive(Clone, Debug, Default)]
+pub struct ViewContext {
+    /// Per axis: the image's version and its quad.
+    pub slices: [Option<(u64, SliceQuad)>; 3],
+    /// The clipping plane.
+    pub clip: Option<ClipPlane>,
+    /// Names drawn beside the contours (empty: none).
+    pub labels: Vec<Label>,
+    /// The legend of the visible contours (empty: none).
+    pub legend: Vec<LegendEntry>,
+    /// Draw the axis triad.
+    pub triad: bool,
+}
+
+/// A name drawn in the view at a point of its contour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Label {
+    /// The text.
+    pub text: String,
+    /// Its contour's colour.
+    pub colour: Color32,
+    /// Where, in world coordinates.
+    pub anchor: [f32; 3],
 }
 
 impl Default for View3d {
@@ -105,6 +142,127 @@ impl View3d {
             last_render_ms: 0.0,
             renders: 0,
             fitted_to_contours: false,
+            context: ViewContext::default(),
+            slices_set: [0; 3],
+            rect: None,
+        }
+    }
+
+    /// Looks along a standard axis, fitted to the volume.
+    pub fn set_preset(&mut self, preset: ViewPreset) {
+        if let Some((lo, hi)) = self.bounds {
+            self.camera.fit(lo, hi);
+        }
+        self.camera.set_preset(preset);
+    }
+
+    /// Tells the renderer about changed slices and the clip.
+    fn sync_context(&mut self) {
+        let Some(r) = &mut self.renderer else { return };
+        for (slot, s) in self.context.slices.iter().enumerate() {
+            let version = s.as_ref().map_or(0, |(v, _)| *v);
+            if self.slices_set[slot] != version {
+                r.set_slice(slot, s.as_ref().map(|(_, q)| q.clone()));
+                self.slices_set[slot] = version;
+            }
+        }
+        r.set_clip(self.context.clip);
+    }
+
+    /// Labels, legend and triad over the image.
+    fn draw_annotations(&self, ui: &egui::Ui, rect: egui::Rect) {
+        let painter = ui.painter_at(rect);
+        let aspect = rect.width() / rect.height().max(1.0);
+        let vp = self.camera.view_proj(aspect);
+        for l in &self.context.labels {
+            if self.context.clip.is_some_and(|c| !c.keeps(l.anchor)) {
+                continue;
+            }
+            let q = vp * glam::Vec3::from(l.anchor).extend(1.0);
+            if q.w <= 0.0 {
+                continue;
+            }
+            let ndc = q.truncate() / q.w;
+            let p = egui::pos2(
+                rect.left() + (0.5 + 0.5 * ndc.x) * rect.width(),
+                rect.top() + (0.5 - 0.5 * ndc.y) * rect.height(),
+            );
+            let font = egui::FontId::proportional(14.0);
+            let galley = painter.layout_no_wrap(l.text.clone(), font, Color32::WHITE);
+            let at = p + egui::vec2(8.0, -8.0 - galley.size().y);
+            let bg = egui::Rect::from_min_size(at, galley.size()).expand(3.0);
+            painter.line_segment([p, bg.left_bottom()], egui::Stroke::new(1.0, l.colour));
+            painter.circle_filled(p, 3.0, l.colour);
+            painter.rect_filled(bg, 3.0, Color32::from_black_alpha(170));
+            painter.rect_stroke(
+                bg,
+                3.0,
+                egui::Stroke::new(1.0, l.colour),
+                egui::StrokeKind::Outside,
+            );
+            painter.galley(at, galley, Color32::WHITE);
+        }
+        if !self.context.legend.is_empty() {
+            let font = egui::FontId::proportional(14.0);
+            let line = 20.0;
+            let galleys: Vec<_> = self
+                .context
+                .legend
+                .iter()
+                .map(|e| painter.layout_no_wrap(e.name.clone(), font.clone(), Color32::WHITE))
+                .collect();
+            let text_w = galleys.iter().map(|g| g.size().x).fold(0.0, f32::max);
+            let origin = rect.left_top() + egui::vec2(8.0, 8.0);
+            let bg = egui::Rect::from_min_size(
+                origin,
+                egui::vec2(text_w + 36.0, 8.0 + line * galleys.len() as f32),
+            );
+            painter.rect_filled(bg, 4.0, Color32::from_rgba_unmultiplied(20, 20, 22, 190));
+            for (i, (e, g)) in self.context.legend.iter().zip(galleys).enumerate() {
+                let top = origin.y + 4.0 + i as f32 * line;
+                let [r, gg, b] = e.colour;
+                painter.rect_filled(
+                    egui::Rect::from_min_size(
+                        egui::pos2(origin.x + 6.0, top + 3.0),
+                        egui::vec2(14.0, 14.0),
+                    ),
+                    2.0,
+                    Color32::from_rgb(r, gg, b),
+                );
+                let h = g.size().y;
+                painter.galley(
+                    egui::pos2(origin.x + 28.0, top + 0.5 * (line - h)),
+                    g,
+                    Color32::WHITE,
+                );
+            }
+        }
+        if self.context.triad {
+            let (right, up) = self.camera.screen_axes();
+            let forward = up.cross(right);
+            let centre = rect.left_bottom() + egui::vec2(44.0, -44.0);
+            let len = 30.0;
+            let axes = [
+                (glam::Vec3::X, "x", Color32::from_rgb(230, 80, 70)),
+                (glam::Vec3::Y, "y", Color32::from_rgb(100, 200, 90)),
+                (glam::Vec3::Z, "z", Color32::from_rgb(90, 140, 240)),
+            ];
+            let mut order: Vec<_> = axes.iter().collect();
+            // Farthest first, so the nearest axis is drawn on top.
+            order.sort_by(|a, b| a.0.dot(forward).total_cmp(&b.0.dot(forward)).reverse());
+            painter.circle_filled(centre, 40.0, Color32::from_black_alpha(90));
+            for (axis, name, colour) in order {
+                let d = egui::vec2(axis.dot(right), -axis.dot(up));
+                let tip = centre + len * d;
+                painter.line_segment([centre, tip], egui::Stroke::new(2.5, *colour));
+                painter.text(
+                    centre + (len + 8.0) * d,
+                    egui::Align2::CENTER_CENTER,
+                    *name,
+                    egui::FontId::proportional(13.0),
+                    *colour,
+                );
+            }
         }
     }
 
@@ -158,6 +316,7 @@ impl View3d {
         let mut events = ViewEvents::default();
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        self.rect = Some(rect);
         response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "3D view"));
         let Some(rs) = rs else {
             ui.painter().text(
@@ -209,6 +368,7 @@ impl View3d {
             }
             renderer.set_style(id, rgba(m.colour), m.visible, m.highlighted);
         }
+        self.sync_context();
         let Some(renderer) = &mut self.renderer else {
             return events;
         };
@@ -283,6 +443,7 @@ impl View3d {
                 Color32::WHITE,
             );
         }
+        self.draw_annotations(ui, rect);
         if scene.is_empty() {
             ui.painter().text(
                 rect.center_top() + egui::vec2(0.0, 24.0),
