@@ -2,7 +2,7 @@
 //! side, on the volumes of a folder and on the experiment's families
 //! ([`crate::tree::raichel_seshadhri::families`]), one row each: the
 //! fastest of `--repeat` uncounted builds of each engine (both measured in
-//! the same run, so the ratio survives a noisy machine), then one counted
+//! the same run, alternately, so the ratio survives a noisy machine), then one counted
 //! build of each for the value comparisons, next to n log2 n. With `--csv`
 //! the rows also go to a file, for the README's plot
 //! (scripts/raichel_seshadhri_plot.py).
@@ -15,7 +15,6 @@ use crate::tree::raichel_seshadhri::{self, count, families};
 use anyhow::Context;
 use std::io::Write;
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// One row: a field and both engines on it.
 struct Row {
@@ -31,35 +30,26 @@ struct Row {
     shape: f64,
 }
 
-fn fastest<T>(repeat: usize, mut f: impl FnMut() -> (T, Duration)) -> (T, f64) {
-    let mut best: Option<(T, f64)> = None;
-    for _ in 0..repeat.max(1) {
-        let (x, d) = f();
-        let d = d.as_secs_f64();
-        if best.as_ref().is_none_or(|b| d < b.1) {
-            best = Some((x, d));
-        }
-    }
-    best.unwrap_or_else(|| unreachable!("repeat >= 1"))
-}
-
 fn never<T>(_: crate::progress::Cancelled) -> T {
     unreachable!("nobody cancels a benchmark")
 }
 
 fn measure(family: &'static str, name: &str, field: &ScalarField, repeat: usize) -> Row {
-    let ((nodes, shape), engine_s) = fastest(repeat, || {
+    // The engines alternate, so that a burst of load on the shared
+    // machine hits both; each keeps its fastest run.
+    let (mut engine_s, mut rs_s) = (f64::INFINITY, f64::INFINITY);
+    let (mut nodes, mut shape) = (0, 0.0);
+    for i in 0..repeat.max(1) {
         let (tree, times) = ContourTree::from_field(field, &Progress::new()).unwrap_or_else(never);
-        (
-            (tree.nodes().len(), raichel_seshadhri::shape_term(&tree)),
-            times.total(),
-        )
-    });
-    let (_, rs_s) = fastest(repeat, || {
+        engine_s = engine_s.min(times.total().as_secs_f64());
+        if i == 0 {
+            (nodes, shape) = (tree.nodes().len(), raichel_seshadhri::shape_term(&tree));
+        }
+        drop(tree);
         let (_, stats) =
             raichel_seshadhri::from_field(field, false, &Progress::new()).unwrap_or_else(never);
-        ((), stats.times.total())
-    });
+        rs_s = rs_s.min(stats.times.total().as_secs_f64());
+    }
     let (_, engine) = count::engine_comparisons(field, &Progress::new()).unwrap_or_else(never);
     let (_, stats) =
         raichel_seshadhri::from_field(field, true, &Progress::new()).unwrap_or_else(never);

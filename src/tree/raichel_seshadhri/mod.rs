@@ -36,12 +36,18 @@
 //!    neighbour they climb to (the lowest upper neighbour reachable along
 //!    link edges, whose order step 1 already knows), so each starts from its
 //!    upper neighbour's arc: one comparison when v lies on it, else a
-//!    search along the rest of the path by Myers' jump pointers in the tree
-//!    rooted at the global minimum (O(log depth) comparisons; a plain walk
-//!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
+//!    search along the rest of the path in the tree rooted at the global
+//!    minimum: a walk of up to [`LOCATE_WALK`] nodes from where each part
+//!    of the path starts (the answer is usually there), then Myers' jump
+//!    pointers (O(log depth) comparisons; a plain walk cost thousands per
+//!    vertex at the foot of tooth's noisy trunk, and jump pointers alone,
+//!    climbing from m' at the bottom, 12 per vertex on tooth). Every
 //!    comparison is with a supernode on v's own monotone path (an ancestor
 //!    or descendant in the augmented tree). The way down at a node towards
-//!    m' is chosen by Euler-tour intervals, without comparisons.
+//!    m' is chosen by Euler-tour intervals, without comparisons. Both the
+//!    descents and the placing run on all cores over chunks of ids: a
+//!    vertex's minimum and superarc do not depend on the path that found
+//!    them, so two threads meeting on a chain store the same value.
 //! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
 //!    k_a regular vertices. The paper computes the unaugmented tree and has
 //!    no such term; it is the price of the augmented one.
@@ -450,62 +456,83 @@ pub fn build<O: CountingOrder + ?Sized>(
         }
     };
     let walk = SuperarcWalk::new(&nodes, &arcs);
+    // Both passes below run on all cores over chunks of ids. A vertex's
+    // descent minimum and its superarc are facts of the field, not of the
+    // path that reached them, so two threads that meet on one chain store
+    // the same value: relaxed atomics suffice, and the result does not
+    // depend on the schedule (only the comparison count may, by the few
+    // vertices two threads place at once).
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    const LOCATE_CHUNK: usize = 1 << 14;
+    let chunks = n.div_ceil(LOCATE_CHUNK);
     // The minimum each vertex descends to, as a node id.
-    let mut min_of = vec![NONE; n];
-    let mut chain: Vec<u32> = Vec::new();
-    for v in 0..n as u32 {
-        if min_of[v as usize] != NONE {
-            continue;
-        }
-        let mut x = v;
-        while min_of[x as usize] == NONE && lower[x as usize] != 0 {
-            chain.push(x);
-            x = step(x, &offsets, nearest[lower[x as usize] as usize] as u32);
-        }
-        let m = if min_of[x as usize] != NONE {
-            min_of[x as usize]
-        } else {
-            place[x as usize] & !NODE_FLAG
-        };
-        min_of[x as usize] = m;
-        for &y in &chain {
-            min_of[y as usize] = m;
-        }
-        chain.clear();
-    }
-    for v in 0..n as u32 {
-        if (v as usize).is_multiple_of(1 << 20) {
-            progress.check(v as usize, n)?;
-        }
-        if place[v as usize] != NONE {
-            continue;
-        }
-        let mut x = v;
-        while place[x as usize] == NONE {
-            chain.push(x);
-            x = climb(x);
-        }
-        let mut from = place[x as usize];
-        while let Some(y) = chain.pop() {
-            let m = min_of[y as usize];
-            let mut arc = if from & NODE_FLAG != 0 {
-                walk.down_towards(from & !NODE_FLAG, m)
-            } else {
-                from
-            };
-            // Most vertices lie on the first arc; past it, a search by jump
-            // pointers along the rest of the path (see SuperarcWalk).
-            let lower_end = arcs[arc as usize].lower.0;
-            if !values.above(y, nodes[lower_end as usize].vertex) {
-                arc = walk.locate(lower_end, m, |node| {
-                    values.above(nodes[node as usize].vertex, y)
-                });
+    let min_of: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(NONE)).collect();
+    let place_a: Vec<AtomicU32> = place.into_iter().map(AtomicU32::new).collect();
+    (0..chunks)
+        .into_par_iter()
+        .for_each_init(Vec::new, |chain, c| {
+            let end = ((c + 1) * LOCATE_CHUNK).min(n);
+            for v in (c * LOCATE_CHUNK) as u32..end as u32 {
+                if min_of[v as usize].load(Relaxed) != NONE {
+                    continue;
+                }
+                let mut x = v;
+                let mut m = min_of[x as usize].load(Relaxed);
+                while m == NONE && lower[x as usize] != 0 {
+                    chain.push(x);
+                    x = step(x, &offsets, nearest[lower[x as usize] as usize] as u32);
+                    m = min_of[x as usize].load(Relaxed);
+                }
+                if m == NONE {
+                    m = place_a[x as usize].load(Relaxed) & !NODE_FLAG;
+                    min_of[x as usize].store(m, Relaxed);
+                }
+                for &y in chain.iter() {
+                    min_of[y as usize].store(m, Relaxed);
+                }
+                chain.clear();
             }
-            place[y as usize] = arc;
-            from = arc;
-        }
-    }
+        });
+    (0..chunks)
+        .into_par_iter()
+        .try_for_each_init(Vec::new, |chain, c| {
+            progress.check(c * LOCATE_CHUNK, n)?;
+            let end = ((c + 1) * LOCATE_CHUNK).min(n);
+            for v in (c * LOCATE_CHUNK) as u32..end as u32 {
+                if place_a[v as usize].load(Relaxed) != NONE {
+                    continue;
+                }
+                let mut x = v;
+                let mut from = place_a[x as usize].load(Relaxed);
+                while from == NONE {
+                    chain.push(x);
+                    x = climb(x);
+                    from = place_a[x as usize].load(Relaxed);
+                }
+                while let Some(y) = chain.pop() {
+                    let m = min_of[y as usize].load(Relaxed);
+                    let mut arc = if from & NODE_FLAG != 0 {
+                        walk.down_towards(from & !NODE_FLAG, m)
+                    } else {
+                        from
+                    };
+                    // Most vertices lie on the first arc; past it, a search
+                    // by jump pointers along the rest of the path (see
+                    // SuperarcWalk).
+                    let lower_end = arcs[arc as usize].lower.0;
+                    if !values.above(y, nodes[lower_end as usize].vertex) {
+                        arc = walk.locate(lower_end, m, |node| {
+                            values.above(nodes[node as usize].vertex, y)
+                        });
+                    }
+                    place_a[y as usize].store(arc, Relaxed);
+                    from = arc;
+                }
+            }
+            Ok::<(), Cancelled>(())
+        })?;
     drop(min_of);
+    let place: Vec<u32> = place_a.into_iter().map(AtomicU32::into_inner).collect();
     stats.times.locate = t0.elapsed();
     stats.comparisons.locate = values.comparisons() - c0;
 
@@ -616,6 +643,10 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
     next
 }
 
+/// Nodes [`SuperarcWalk::locate`] walks down from the common ancestor
+/// before it climbs by jump pointers.
+const LOCATE_WALK: usize = 8;
+
 /// The superarc tree rooted at the global minimum, with Euler-tour
 /// intervals, to choose at a node the down arc that leads towards a given
 /// minimum without comparing values.
@@ -636,6 +667,9 @@ struct SuperarcWalk {
     jump: Vec<u32>,
     tin: Vec<u32>,
     tout: Vec<u32>,
+    /// Children in the rooted tree, per node.
+    child_off: Vec<u32>,
+    child: Vec<u32>,
 }
 
 impl SuperarcWalk {
@@ -722,6 +756,23 @@ impl SuperarcWalk {
                 }
             }
         }
+        let mut child_off = vec![0u32; k + 1];
+        for &p in &parent {
+            if p != NONE {
+                child_off[p as usize + 1] += 1;
+            }
+        }
+        for i in 1..=k {
+            child_off[i] += child_off[i - 1];
+        }
+        let mut fill = child_off.clone();
+        let mut child = vec![0u32; k.saturating_sub(1)];
+        for (w, &p) in parent.iter().enumerate() {
+            if p != NONE {
+                child[fill[p as usize] as usize] = w as u32;
+                fill[p as usize] += 1;
+            }
+        }
         Self {
             down_off,
             down,
@@ -732,6 +783,8 @@ impl SuperarcWalk {
             jump,
             tin,
             tout,
+            child_off,
+            child,
         }
     }
 
@@ -766,14 +819,28 @@ impl SuperarcWalk {
     /// The arc at a height on the monotone path from node `s` down to the
     /// minimum `m`: `above(x)` says whether node x is above that height
     /// (true at `s`, false at `m`). The path climbs from `s` to the common
-    /// ancestor c and descends to `m`; along each part `above` changes once,
-    /// and jump pointers find the change in O(log depth) comparisons.
+    /// ancestor c and descends to `m`; along each part `above` changes once.
+    /// A short walk from the part's start finds the change in a comparison
+    /// or two when it is near (the usual case); past it, jump pointers find
+    /// it in O(log depth) comparisons.
     fn locate(&self, s: u32, m: u32, mut above: impl FnMut(u32) -> bool) -> u32 {
-        let c = self.lca(s, m);
+        let c = if self.in_subtree(m, s) {
+            s
+        } else {
+            self.lca(s, m)
+        };
         let dc = self.depth[c as usize];
         if c != s && !above(c) {
-            // On s's side: the last ancestor of s above the height.
+            // On s's side: the last ancestor of s above the height; a few
+            // parents first (it is usually near s), then jump pointers.
             let mut x = s;
+            for _ in 0..LOCATE_WALK {
+                let p = self.parent[x as usize];
+                if p == c || !above(p) {
+                    return self.parent_arc[x as usize];
+                }
+                x = p;
+            }
             loop {
                 let j = self.jump[x as usize];
                 if self.depth[j as usize] > dc && above(j) {
@@ -788,7 +855,23 @@ impl SuperarcWalk {
                 return self.parent_arc[x as usize];
             }
         }
-        // On m's side: the last ancestor of m below the height.
+        // On m's side: the last ancestor of m below the height. It is
+        // usually a node or two below c (the height is met near where the
+        // search starts), while the jump pointers climb from m, at the
+        // bottom: walk down from c first, one comparison per node (the child
+        // towards m by Euler-tour intervals), and climb from m only past
+        // that (on tooth and the MRI volumes the climb from m made locating
+        // cost 12 comparisons per vertex).
+        let mut x = c;
+        for _ in 0..LOCATE_WALK {
+            let Some(q) = self.child_towards(x, m) else {
+                break;
+            };
+            if !above(q) {
+                return self.parent_arc[q as usize];
+            }
+            x = q;
+        }
         let mut x = m;
         loop {
             let j = self.jump[x as usize];
@@ -803,6 +886,18 @@ impl SuperarcWalk {
             }
             return self.parent_arc[x as usize];
         }
+    }
+
+    /// The child of `x` in the rooted tree whose subtree holds `m`, if `m`
+    /// lies strictly below `x`.
+    #[inline]
+    fn child_towards(&self, x: u32, m: u32) -> Option<u32> {
+        if x == m || !self.in_subtree(m, x) {
+            return None;
+        }
+        let kids = &self.child
+            [self.child_off[x as usize] as usize..self.child_off[x as usize + 1] as usize];
+        kids.iter().copied().find(|&q| self.in_subtree(m, q))
     }
 
     #[inline]

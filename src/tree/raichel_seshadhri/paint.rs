@@ -30,7 +30,7 @@
 //! the superlevel set, as the join tree's definition does.
 //!
 //! Memory: 4 bytes per vertex of paint and 4 of BFS queue (both freed on
-//! return), 12 bytes per heap entry, 12 per colour.
+//! return), 16 bytes per heap entry, 17 per colour.
 
 use super::heap::{self, PairingHeaps};
 use crate::field::VertexOrder;
@@ -130,7 +130,11 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
     // init 4-5: every non-maximal critical vertex into the heap of one
     // colour of each up-star; rep(c) = c, att(c) = its maximum.
     let mut heaps = PairingHeaps::with_capacity(t + t / 2);
-    let mut root = vec![heap::NONE; colours];
+    // Per colour class: its heap's root entry and the item on top (`NONE`
+    // when empty), side by side, so that asking a class for its highest
+    // vertex, which `update` does for every colour of every vertex it
+    // visits, is one cache line and no visit to the heap's arena.
+    let mut root = vec![[heap::NONE, NONE]; colours];
     let mut uf: Vec<u32> = (0..colours as u32).collect();
     let mut rank = vec![0u8; colours];
     let mut processed = vec![false; t];
@@ -162,7 +166,8 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         m.grid.link_components(up, |k| {
             let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
             let e = heaps.singleton(v, i as u32);
-            root[c] = heaps.meld(root[c], e, order);
+            let r = heaps.meld(root[c][0], e, order);
+            root[c] = [r, heaps.top(r).unwrap_or(NONE)];
         });
     }
 
@@ -195,15 +200,19 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
                 }
                 continue;
             }
+            // The classes of h's colours, kept in `cur` for build when h
+            // turns out ripe.
             let mut blocker = NONE;
+            cur.clear();
             for &c in &cols[col_off[h as usize] as usize..col_off[h as usize + 1] as usize] {
                 let r = find(&mut uf, c);
-                match heaps.top(root[r as usize]) {
-                    Some(top) if top != h => {
-                        blocker = top;
-                        break;
-                    }
-                    _ => {}
+                let top = root[r as usize][1];
+                if top != NONE && top != h {
+                    blocker = top;
+                    break;
+                }
+                if !cur.contains(&r) {
+                    cur.push(r);
                 }
             }
             if blocker == NONE {
@@ -215,22 +224,15 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
             continue;
         }
         stack.pop();
-        // build 2b-f: process the ripe vertex.
-        cur.clear();
-        for &c in &cols[col_off[hs as usize] as usize..col_off[hs as usize + 1] as usize] {
-            let r = find(&mut uf, c);
-            if !cur.contains(&r) {
-                cur.push(r);
-            }
-        }
+        // build 2b-f: process the ripe vertex (its classes are in `cur`).
         let mut melded = heap::NONE;
         for &r in &cur {
             parent[att[r as usize] as usize] = hs;
-            let mut hr = root[r as usize];
+            let mut hr = root[r as usize][0];
             while heaps.top(hr) == Some(hs) {
                 hr = heaps.pop(hr, order);
             }
-            root[r as usize] = heap::NONE;
+            root[r as usize] = [heap::NONE, NONE];
             melded = heaps.meld(melded, hr, order);
         }
         // Union by rank: the representative is the class of highest rank.
@@ -248,7 +250,7 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
                 uf[r as usize] = c;
             }
         }
-        root[c as usize] = melded;
+        root[c as usize] = [melded, heaps.top(melded).unwrap_or(NONE)];
         att[c as usize] = hs;
         children[hs as usize] = cur.len() as u32;
         processed[hs as usize] = true;
