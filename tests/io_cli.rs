@@ -178,3 +178,23 @@ fn info_prints_origin_direction_and_space_and_the_same_as_json() {
         .sum();
     assert_eq!(counts, 60);
 }
+
+#[test]
+fn render_without_xdg_runtime_dir_prints_no_error_on_success() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shot.png");
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_flexiso"))
+        .args(["render", "synthetic:8", "--size", "32x24", "--out"])
+        .arg(&out)
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(out.is_file());
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+    assert!(!stderr.contains("error"), "{stderr}");
+}

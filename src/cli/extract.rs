@@ -26,7 +26,6 @@ use crate::contour::export::{MeshFormat, write_contours_as, write_mesh};
 use crate::contour::{self, ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds};
 use crate::field::Isovalue;
 use crate::measure::betti::ContourTopology;
-use crate::progress::Progress;
 use crate::report;
 use crate::simplify::Measure;
 use crate::tree::ContourTree;
@@ -118,8 +117,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !args.iso.is_finite() {
         bail!("--iso must be a finite number");
     }
+    let bar = super::bar::StageBar::new();
     let t = Instant::now();
+    bar.stage("reading");
     let volume = args.input.load()?;
+    bar.done();
     let load = t.elapsed().as_secs_f64();
     let field = &volume.field;
     for w in &volume.warnings {
@@ -139,13 +141,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
 
     let t = Instant::now();
-    let (tree, _) = ContourTree::from_field(field, &Progress::new())
+    let (tree, _) = ContourTree::from_field(field, bar.progress())
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
     let arcs = match args.simplify {
         Some(n) => Arcs::Simplified(n, args.measure),
         None => Arcs::Superarcs,
     };
+    bar.stage(if args.simplify.is_some() {
+        "simplification"
+    } else {
+        "arcs"
+    });
     let targets = arcs.targets(&tree, field)?;
+    bar.done();
     report!(
         r,
         "tree:     {} superarcs{} ({:.3} s)",
@@ -184,11 +192,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let seeding = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    bar.stage("extraction");
     let meshes = match seeds.as_slice() {
         [seed] => vec![ContourFollower::new(field).follow(seed, iso)],
         _ => contour::contours_through(&tree, field, &seeds, iso),
     };
     let extract = t.elapsed().as_secs_f64();
+    bar.done();
     let mut contours: Vec<(&Target, ContourMesh)> = found.into_iter().zip(meshes).collect();
     report!(
         r,
@@ -200,10 +210,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     contours.retain(|(_, m)| m.num_triangles() > 0);
     // What is written: vertices cut at a vertex value welded, closed
     // contours facing out.
+    bar.stage("weld and orient");
     contours.par_iter_mut().for_each(|(_, m)| {
         m.weld();
         m.orient_outward();
     });
+    bar.done();
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
     let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();
     report!(
@@ -215,11 +227,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
 
     let t = Instant::now();
+    bar.stage("measures");
     let betti = ContourTopology::new(&tree, field);
     let topo: Vec<MeshTopology> = contours
         .par_iter()
         .map(|(_, m)| MeshTopology::of(&m.positions, &m.indices))
         .collect();
+    bar.done();
     report!(
         r,
         "measure:  {:.3} s (Betti numbers of every superarc, topology of every contour)",
@@ -260,6 +274,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
     if let (Some(out), Some(format)) = (&args.out, format) {
         let t = Instant::now();
+        bar.stage("writing");
         let names: Vec<String> = contours
             .iter()
             .map(|(t, _)| format!("arc_{}_{}", t.upper, t.lower))
@@ -280,6 +295,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else {
             write_contours_as(out, format, &meshes, &names, &note)?;
         }
+        bar.done();
         report!(
             r,
             "wrote:    {} ({} object(s), {:.3} s)",

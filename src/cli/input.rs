@@ -26,8 +26,8 @@ pub enum Endian {
 /// The volume to read and how.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
 pub struct InputArgs {
-    /// Volume file (.nrrd .nhdr .mha .mhd .vtk .vti .nii .nii.gz .raw), a
-    /// folder of PNG/TIFF slices, or `synthetic[:N|:XxYxZ]`,
+    /// Volume file (.nrrd .nhdr .mha .mhd .vtk .vti .nii .nii.gz .mgh .mgz
+    /// .tif .dcm .raw), a folder of PNG/TIFF slices or of one DICOM series, or `synthetic[:N|:XxYxZ]`,
     /// `synthetic-noisy[:N]` for the built-in field.
     #[arg(value_name = "INPUT", default_value = "synthetic")]
     pub input: String,
@@ -45,6 +45,14 @@ pub struct InputArgs {
     /// them by the smallest or largest finite value.
     #[arg(long, value_parser = nan_parser(), default_value_t = NanPolicy::Error)]
     pub nan: NanPolicy,
+    /// Which frame of a 4D file (NIfTI time series, MGH frames, 4D NRRD or
+    /// MetaImage) to read, from 0.
+    #[arg(long, value_name = "T")]
+    pub frame: Option<usize>,
+    /// Which component of a vector file (MetaImage channels, NRRD vector
+    /// axis, VTK/VTI NumberOfComponents, NIfTI dim 5) to read, from 0.
+    #[arg(long, value_name = "C")]
+    pub component: Option<usize>,
 }
 
 impl Default for InputArgs {
@@ -61,6 +69,8 @@ pub fn default_input() -> InputArgs {
         scalar_type: None,
         endian: Endian::Little,
         nan: NanPolicy::Error,
+        frame: None,
+        component: None,
     }
 }
 
@@ -101,6 +111,8 @@ impl InputArgs {
             raw,
             nan: self.nan,
             max_memory: None,
+            frame: self.frame,
+            component: self.component,
         })
     }
 

@@ -6,13 +6,15 @@
 //! is `-`) is the only thing on standard output when it goes there; the
 //! report (statistics, timings) then goes to standard error, and nowhere
 //! with `-q` ([`Report`]). Output paths are checked before the work
-//! ([`check_output`]).
+//! ([`check_output`]). Stages longer than half a second show a progress
+//! bar on standard error when it is a terminal ([`bar`]).
 
 use std::io::Write as _;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub mod arcs;
+pub mod bar;
 pub mod bench;
 pub mod bench_engines;
 pub mod extract;

@@ -74,12 +74,54 @@ struct Surface {
     indices: Vec<u32>,
 }
 
+/// Gives the process a private `XDG_RUNTIME_DIR` when it has none (or not
+/// an absolute path), before any thread starts. wgpu's Vulkan and GL
+/// back-ends load libwayland-client, which prints "error: XDG_RUNTIME_DIR
+/// is invalid or not set in the environment." on standard error when it
+/// looks for a compositor's socket there: on a successful headless render
+/// that line is noise (and scares users). The folder is
+/// `$TMPDIR/flexiso-runtime-UID`, mode 0700, made once and reused; it holds
+/// no socket, so the lookup simply finds no compositor.
+pub fn ensure_runtime_dir() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| {
+        std::path::Path::new(&d).is_absolute() && std::path::Path::new(&d).is_dir()
+    });
+    if valid {
+        return;
+    }
+    if let Some(dir) = private_runtime_dir() {
+        // SAFETY: called first thing in `run`, before this process starts
+        // any thread (the engine's pool, the renderer's), so nothing reads
+        // the environment concurrently.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir) };
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn private_runtime_dir() -> Option<PathBuf> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    // SAFETY: getuid has no preconditions and cannot fail.
+    let uid = unsafe { libc::getuid() };
+    let dir = std::env::temp_dir().join(format!("flexiso-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let meta = std::fs::symlink_metadata(&dir).ok()?;
+    let ours = meta.is_dir() && meta.uid() == uid && meta.permissions().mode() & 0o077 == 0;
+    ours.then_some(dir)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn private_runtime_dir() -> Option<PathBuf> {
+    None
+}
+
 /// Runs `flexiso render`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    ensure_runtime_dir();
     let (width, height) = args.size.unwrap_or((1024, 768));
     super::check_output(&args.out)?;
     // The report goes to standard error: the picture is the product.
     let r = super::Report::new(true);
+    let bar = super::bar::StageBar::new();
     let session = match &args.session {
         Some(p) => Some((crate::session::Session::read(p)?, p.clone())),
         None => None,
@@ -90,14 +132,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             crate::field::io::ReadOptions::default(),
         )?
         .load()?,
-        None => args.input.load()?,
+        None => {
+            bar.stage("reading");
+            let v = args.input.load()?;
+            bar.done();
+            v
+        }
     };
     let field = &volume.field;
     for w in &volume.warnings {
         r.warn(w);
     }
-    let (tree, _) = ContourTree::from_field(field, &crate::progress::Progress::new())
+    let (tree, _) = ContourTree::from_field(field, bar.progress())
         .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
+    bar.done();
 
     let (lo, hi) = field.range();
     let mut colours = Vec::new();

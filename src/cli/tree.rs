@@ -68,8 +68,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         super::check_output(path)?;
     }
     let r = Report::new(args.json.as_deref().is_some_and(super::is_stdio));
+    let bar = super::bar::StageBar::new();
     let t = Instant::now();
+    bar.stage("reading");
     let volume = args.input.load()?;
+    bar.done();
     for w in &volume.warnings {
         r.warn(w);
     }
@@ -79,15 +82,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (tree, timing) = match args.algorithm {
         Algorithm::CarrSnoeyinkAxen => {
             let (tree, times) =
-                ContourTree::from_field(field, &Progress::new()).map_err(cancelled)?;
+                ContourTree::from_field(field, bar.progress()).map_err(cancelled)?;
             (tree, Timing::Engine(times))
         }
         Algorithm::RaichelSeshadhri => {
             let (tree, stats) =
-                raichel_seshadhri::from_field(field, false, &Progress::new()).map_err(cancelled)?;
+                raichel_seshadhri::from_field(field, false, bar.progress()).map_err(cancelled)?;
             (tree, Timing::Painting(stats))
         }
     };
+    bar.done();
     let [x, y, z] = field.dims();
     let (lo, hi) = field.range();
     let (maxima, minima, joins, splits) = tree.kind_counts();
@@ -110,7 +114,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     report!(r, "supernodes:     {}", tree.nodes().len());
     report!(r, "superarcs:      {}", tree.arcs().len());
     let t = Instant::now();
+    bar.stage("measures");
     let collapsed = CollapsedTree::new(&tree, field);
+    bar.done();
     let collapse = t.elapsed();
     report!(
         r,
@@ -119,6 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     let level = if args.simplify.is_some() || args.feature_size.is_some() {
         let t = Instant::now();
+        bar.stage("simplification");
         let sim = Simplification::from_collapsed(&collapsed, args.measure);
         let sequence = t.elapsed();
         let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
@@ -127,6 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         } else if let Some(x) = args.feature_size {
             level.set_feature_size(x);
         }
+        bar.done();
         report!(
             r,
             "simplified:     {} arcs by {} (feature size {}, {} of {} steps; measures and collapse {:.3} s, pruning sequence {:.3} s)",
@@ -200,6 +208,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         print_comparisons(&r, field, args.algorithm)?;
     }
     if let Some(path) = &args.json {
+        bar.stage("writing");
         let mut json = crate::tree::json::tree_json(&tree, field);
         add_geometry(&mut json, &volume, args.space);
         crate::measure::betti::ContourTopology::new(&tree, field).add_to_json(&mut json);
@@ -224,6 +233,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             std::fs::write(path, text)
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
+        bar.done();
     }
     Ok(())
 }

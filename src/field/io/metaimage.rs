@@ -7,7 +7,8 @@
 //! `ElementSize`), `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`,
 //! `CompressedData`, `BinaryData` (False: ASCII), `HeaderSize` (bytes to
 //! skip in the data file; -1: the data ends the file), and
-//! `ElementNumberOfChannels` (must be 1), and the geometry in ITK's LPS
+//! `ElementNumberOfChannels` (interleaved
+//! components, one read: [`super::ReadOptions::component`]), and the geometry in ITK's LPS
 //! space: `Offset` (or `Position`, `Origin`) and `TransformMatrix` (or
 //! `Rotation`, `Orientation`), whose first three numbers are the
 //! direction of the first axis. Keys are matched without case.
@@ -89,16 +90,18 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     }
     let mut dims = [1usize; 3];
     dims[..ndims].copy_from_slice(&sizes);
-    let channels = get("ElementNumberOfChannels").unwrap_or("1");
-    if channels != "1" {
-        return Err(invalid(
-            path,
-            format!(
-                "ElementNumberOfChannels {} is not supported (scalar data only)",
-                clip(channels)
-            ),
-        ));
-    }
+    let channels_text = get("ElementNumberOfChannels").unwrap_or("1");
+    let channels: usize = match channels_text.trim().parse() {
+        Ok(c) if c >= 1 => c,
+        _ => {
+            return Err(invalid(
+                path,
+                format!("bad 'ElementNumberOfChannels': '{}'", clip(channels_text)),
+            ));
+        }
+    };
+    super::choose(path, super::Several::Frames, 1, opts)?;
+    let component = super::choose(path, super::Several::Components, channels, opts)?;
     let et = get("ElementType").ok_or_else(|| invalid(path, "missing 'ElementType'"))?;
     let ty = match et.to_ascii_uppercase().as_str() {
         "MET_UCHAR" => ScalarType::U8,
@@ -150,6 +153,11 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             .map_err(|_| invalid(path, format!("bad 'HeaderSize': '{}'", clip(v))))?,
     };
     let n = check_dims(path, dims, ty, opts)?;
+    // Channels are interleaved (the fastest axis): all are read, one kept.
+    let stored = match dims[0].checked_mul(channels) {
+        Some(x) => check_dims(path, [x, dims[1], dims[2]], ty, opts)?,
+        None => return Err(invalid(path, format!("{channels} channels overflow"))),
+    };
     let local = file_name.eq_ignore_ascii_case("LOCAL");
     let data_file = if local {
         if data_offset == usize::MAX {
@@ -180,7 +188,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             let len = std::fs::metadata(&data_file)
                 .map_err(|e| io_error(&data_file, e))?
                 .len();
-            let need = n as u64 * ty.size() as u64;
+            let need = stored as u64 * ty.size() as u64;
             if len < base + need {
                 return Err(invalid(
                     &data_file,
@@ -207,14 +215,16 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         encoding,
         ty,
         big_endian,
-        count: n,
+        count: stored,
         tail: Tail::Error,
     };
     let (values, mut warnings) = read_data(path, &spec)?;
+    let values = super::select(values, n, channels, component, super::Several::Components);
     let format = format!(
-        "MetaImage ({}, {})",
+        "MetaImage ({}, {}{})",
         if local { ".mha" } else { ".mhd" },
-        encoding.name()
+        encoding.name(),
+        super::choice_note(super::Several::Components, component, channels)
     );
     let numbers = |keys: &[&str], want: usize| -> Result<Option<Vec<f64>>, ReadError> {
         let Some((key, v)) = keys.iter().find_map(|k| get(k).map(|v| (k, v))) else {

@@ -4,7 +4,7 @@
 //! | offset | field | use |
 //! |---|---|---|
 //! | 0 | `version` (i32) | 1 |
-//! | 4 | `width, height, depth, nframes` (i32) | dims; more than one frame is refused |
+//! | 4 | `width, height, depth, nframes` (i32) | dims; one frame is read ([`super::ReadOptions::frame`]) |
 //! | 20 | `type` (i32) | 0 uint8, 1 int32, 3 float32, 4 int16 |
 //! | 28 | `goodRASflag` (i16) | when 1, the geometry below is valid |
 //! | 30 | `spacing` (3 f32) | voxel size |
@@ -70,12 +70,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     if sizes.iter().any(|&s| s < 1) {
         return Err(invalid(path, format!("bad dimensions {sizes:?}")));
     }
-    if frames != 1 {
-        return Err(invalid(
-            path,
-            format!("{frames} frames: only single-frame (3D scalar) MGH volumes are read"),
-        ));
+    if frames < 1 {
+        return Err(invalid(path, format!("bad frame count {frames}")));
     }
+    let frames = frames as usize;
+    let frame = super::choose(path, super::Several::Frames, frames, opts)?;
+    super::choose(path, super::Several::Components, 1, opts)?;
     let dims = sizes.map(|s| s as usize);
     let ty = match i32_at(20) {
         0 => ScalarType::U8,
@@ -90,10 +90,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         }
     };
     let n = check_dims(path, dims, ty, opts)?;
+    // Frames are whole volumes one after the other.
+    let start = HEADER as u64 + (frame * n * ty.size()) as u64;
     let (offset, skip, encoding) = if gz {
-        (0, HEADER as u64, Encoding::Gzip)
+        (0, start, Encoding::Gzip)
     } else {
-        (HEADER as u64, 0, Encoding::Raw)
+        (start, 0, Encoding::Raw)
     };
     let spec = DataSpec {
         file: path.to_owned(),
@@ -131,6 +133,10 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             },
         )
     };
-    let format = format!("MGH ({})", if gz { ".mgz, gzip" } else { ".mgh" });
+    let format = format!(
+        "MGH ({}{})",
+        if gz { ".mgz, gzip" } else { ".mgh" },
+        super::choice_note(super::Several::Frames, frame, frames)
+    );
     Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))
 }

@@ -14,6 +14,7 @@
 //! | raw | [`raw`] | `NAME_XxYxZ_TYPE.raw`, or any file with [`ReadOptions::raw`] |
 //! | TIFF | [`stack`] | `.tif`, `.tiff`: one grayscale page, or a multi-page 3D volume |
 //! | image stack | [`stack`] | a folder of 8/16-bit gray PNG or grayscale TIFF slices |
+//! | DICOM | [`dicom`] | a folder holding one series (one slice per file), or one `.dcm` file; uncompressed transfer syntaxes |
 //!
 //! What every reader guarantees:
 //!
@@ -43,6 +44,7 @@
 //!   or replaced by the smallest or largest finite value ([`NanPolicy`]).
 
 pub mod data;
+pub mod dicom;
 pub mod metaimage;
 pub mod mgh;
 pub mod nifti;
@@ -154,6 +156,108 @@ pub struct ReadOptions {
     /// `MemAvailable` figure of `/proc/meminfo` (no check where that is
     /// unknown).
     pub max_memory: Option<u64>,
+    /// Which 3D frame of a 4D file to read (NIfTI `dim[4]`, MGH frames,
+    /// NRRD and MetaImage time axes), from 0 (the command line's
+    /// `--frame T`). `None` reads the only frame, and refuses a file with
+    /// several, naming the option and the range.
+    pub frame: Option<usize>,
+    /// Which component of a vector file to read (MetaImage channels, a
+    /// NRRD vector axis, VTK `NumberOfComponents`, NIfTI `dim[5]`), from 0
+    /// (`--component C`). `None` as for [`ReadOptions::frame`].
+    pub component: Option<usize>,
+}
+
+/// Frames or components: the two ways a file holds several 3D volumes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Several {
+    /// Frames of a 4D file: whole 3D volumes one after the other (time).
+    Frames,
+    /// Components of a vector file: interleaved, the fastest axis.
+    Components,
+}
+
+impl Several {
+    fn names(self) -> (&'static str, &'static str, &'static str) {
+        match self {
+            Several::Frames => ("frame", "frames", "--frame T"),
+            Several::Components => ("component", "components", "--component C"),
+        }
+    }
+}
+
+/// Which of `count` frames or components to read: the one chosen in
+/// `opts` (checked against `count`), or the only one; a file with several
+/// and no choice is an error that names the option and the range.
+pub(crate) fn choose(
+    path: &Path,
+    what: Several,
+    count: usize,
+    opts: &ReadOptions,
+) -> Result<usize, ReadError> {
+    let chosen = match what {
+        Several::Frames => opts.frame,
+        Several::Components => opts.component,
+    };
+    let (one, many, option) = what.names();
+    match chosen {
+        Some(k) if k < count => Ok(k),
+        Some(k) => Err(invalid(
+            path,
+            format!(
+                "{one} {k} does not exist: the file has {count} {} (0 to {})",
+                if count == 1 { one } else { many },
+                count - 1
+            ),
+        )),
+        None if count == 1 => Ok(0),
+        None => Err(invalid(
+            path,
+            format!(
+                "holds {count} {many}: choose one with {option} (0 to {})",
+                count - 1
+            ),
+        )),
+    }
+}
+
+/// The error for a frame or component chosen on a file that has neither.
+pub(crate) fn refuse_choice(path: &Path, opts: &ReadOptions) -> Result<(), ReadError> {
+    choose(path, Several::Frames, 1, opts)?;
+    choose(path, Several::Components, 1, opts).map(drop)
+}
+
+/// The `k`-th of `count` 3D volumes of `n` values each held in `values`:
+/// block `k` for frames, every `count`-th value from `k` for components.
+pub(crate) fn select(values: Values, n: usize, count: usize, k: usize, what: Several) -> Values {
+    if count == 1 {
+        return values;
+    }
+    macro_rules! pick {
+        ($v:expr, $variant:ident) => {
+            Values::$variant(match what {
+                Several::Frames => $v[k * n..(k + 1) * n].to_vec(),
+                Several::Components => $v.iter().skip(k).step_by(count).copied().collect(),
+            })
+        };
+    }
+    match values {
+        Values::U8(v) => pick!(v, U8),
+        Values::I8(v) => pick!(v, I8),
+        Values::U16(v) => pick!(v, U16),
+        Values::I16(v) => pick!(v, I16),
+        Values::U32(v) => pick!(v, U32),
+        Values::I32(v) => pick!(v, I32),
+        Values::F32(v) => pick!(v, F32),
+        Values::F64(v) => pick!(v, F64),
+    }
+}
+
+/// `", frame 3 of 10"` (or component), for a format string; empty for one.
+pub(crate) fn choice_note(what: Several, k: usize, count: usize) -> String {
+    if count <= 1 {
+        return String::new();
+    }
+    format!(", {} {k} of {count}", what.names().0)
 }
 
 /// A volume as read from a file.
@@ -446,9 +550,11 @@ pub fn check_volume_size(
 pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
     if meta.is_dir() {
+        refuse_choice(path, opts)?;
         return stack::read(path, opts);
     }
     if let Some(layout) = &opts.raw {
+        refuse_choice(path, opts)?;
         return raw::read(path, layout, opts);
     }
     let name = path
@@ -472,12 +578,18 @@ pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError>
         return nifti::read(path, opts);
     }
     if ext(".raw") {
+        refuse_choice(path, opts)?;
         return raw::read_by_name(path, opts);
     }
     if ext(".mgh") || ext(".mgz") {
         return mgh::read(path, opts);
     }
+    if ext(".dcm") || ext(".dicom") || ext(".ima") {
+        refuse_choice(path, opts)?;
+        return dicom::read_file(path, opts);
+    }
     if ext(".png") || ext(".tif") || ext(".tiff") {
+        refuse_choice(path, opts)?;
         return stack::read_single(path, opts);
     }
     // Unknown extension: sniff.
@@ -495,6 +607,10 @@ pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError>
     if head.starts_with(b"<?xml") || head.starts_with(b"<VTKFile") {
         return vti::read(path, opts);
     }
+    if head.len() >= 132 && &head[128..132] == b"DICM" {
+        refuse_choice(path, opts)?;
+        return dicom::read_file(path, opts);
+    }
     if nifti::sniff(head) {
         return nifti::read(path, opts);
     }
@@ -504,8 +620,8 @@ pub fn read_volume(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError>
     }
     Err(invalid(
         path,
-        "unknown volume format (expected .nrrd, .nhdr, .mha, .mhd, .vtk, .vti, .nii, .nii.gz, .mgh, .mgz, .tif, \
-         NAME_XxYxZ_TYPE.raw, or a folder of PNG/TIFF slices; for other raw files give --dims and --type)",
+        "unknown volume format (expected .nrrd, .nhdr, .mha, .mhd, .vtk, .vti, .nii, .nii.gz, .mgh, .mgz, .tif, .dcm, \
+         NAME_XxYxZ_TYPE.raw, or a folder of PNG/TIFF slices or of one DICOM series; for other raw files give --dims and --type)",
     ))
 }
 

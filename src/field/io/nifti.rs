@@ -6,7 +6,7 @@
 //! | offset | field | use |
 //! |---|---|---|
 //! | 0 | `sizeof_hdr` (i32) | 348; read byte-swapped it gives the byte order |
-//! | 40 | `dim[8]` (i16) | `dim[0]` axes, `dim[1..=3]` sizes; higher axes must be 1 |
+//! | 40 | `dim[8]` (i16) | `dim[0]` axes, `dim[1..=3]` sizes, `dim[4]` frames, `dim[5]` components (one of each is read: [`ReadOptions::frame`], [`ReadOptions::component`]); `dim[6..=7]` must be 1 |
 //! | 70 | `datatype` (i16) | 2 u8, 4 i16, 8 i32, 16 f32, 64 f64, 256 i8, 512 u16, 768 u32, 1024 i64, 1280 u64 |
 //! | 72 | `bitpix` (i16) | must match the datatype |
 //! | 76 | `pixdim[8]` (f32) | spacing from `pixdim[1..=3]` (absolute value) |
@@ -196,15 +196,20 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         }
         if i <= 3 {
             dims[i - 1] = *d as usize;
-        } else if *d != 1 {
+        } else if i >= 6 && *d != 1 {
             return Err(invalid(
                 path,
-                format!(
-                    "dim[{i}] = {d}: time series and vector volumes are not supported (only 3D scalars)"
-                ),
+                format!("dim[{i}] = {d}: only time (dim[4]) and vector (dim[5]) axes are read"),
             ));
         }
     }
+    // Frames (dim[4], time) and components (dim[5]) are whole 3D blocks,
+    // frames faster: block = component · frames + frame.
+    let axis = |i: usize| if ndim >= i { dim[i].max(1) as usize } else { 1 };
+    let (frames, components) = (axis(4), axis(5));
+    let frame = super::choose(path, super::Several::Frames, frames, opts)?;
+    let component = super::choose(path, super::Several::Components, components, opts)?;
+    let block = (component * frames + frame) as u64;
     let (datatype, bitpix) = (h.datatype, h.bitpix);
     let ty = match datatype {
         2 => ScalarType::U8,
@@ -243,13 +248,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     }
     let vox_offset = vox_offset as u64;
     let n = check_dims(path, dims, ty, opts)?;
+    let block_offset = block * n as u64 * ty.size() as u64;
     let (file, offset, skip, encoding) = if pair {
         let img = image_file(path)?;
         let igz = is_gz(&img)?;
         if igz {
-            (img, 0, vox_offset, Encoding::Gzip)
+            (img, 0, vox_offset + block_offset, Encoding::Gzip)
         } else {
-            (img, vox_offset, 0, Encoding::Raw)
+            (img, vox_offset + block_offset, 0, Encoding::Raw)
         }
     } else {
         let header = if h.version == 1 { HEADER_1 } else { HEADER_2 } as u64;
@@ -260,9 +266,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             ));
         }
         if gz {
-            (path.to_owned(), 0, vox_offset, Encoding::Gzip)
+            (
+                path.to_owned(),
+                0,
+                vox_offset + block_offset,
+                Encoding::Gzip,
+            )
         } else {
-            (path.to_owned(), vox_offset, 0, Encoding::Raw)
+            (path.to_owned(), vox_offset + block_offset, 0, Encoding::Raw)
         }
     };
     let spec = DataSpec {
@@ -273,7 +284,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         ty,
         big_endian,
         count: n,
-        tail: Tail::Warn,
+        // The other frames and components follow the one read.
+        tail: if frames * components > 1 {
+            Tail::Ignore
+        } else {
+            Tail::Warn
+        },
     };
     let (mut values, mut warnings) = read_data(path, &spec)?;
     let scaled =
@@ -282,7 +298,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         values = scale(values, ty, slope, inter);
     }
     let format = format!(
-        "NIfTI-{} ({}{}{})",
+        "NIfTI-{} ({}{}{}{}{})",
         h.version,
         if pair { ".hdr/.img" } else { ".nii" },
         if encoding == Encoding::Gzip {
@@ -294,7 +310,9 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             format!(", scaled by {slope} + {inter}")
         } else {
             String::new()
-        }
+        },
+        super::choice_note(super::Several::Frames, frame, frames),
+        super::choice_note(super::Several::Components, component, components),
     );
     let (spacing, geometry) = placement(&h, spacing, &mut warnings);
     Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))

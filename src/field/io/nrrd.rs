@@ -2,7 +2,9 @@
 //! after a blank line, or a `.nhdr` header naming a `data file`.
 //!
 //! Read: `type` (every NRRD alias), `dimension` 1 to 3 (missing axes have
-//! size 1), `sizes`, `encoding` raw / gzip / bzip2 / ascii (also `txt`,
+//! size 1), or 4 with a vector axis first or a time axis last (told by
+//! `kinds`, or by a `none` in `space directions`; one component or frame
+//! is read: [`super::ReadOptions`]), `sizes`, `encoding` raw / gzip / bzip2 / ascii (also `txt`,
 //! `text`, `gz`, `bz2`), `endian`, `spacings` or `space directions` (the
 //! spacing of an axis is the norm of its direction vector, its direction
 //! in the world the unit vector), `space origin`, `space` (LPS and RAS
@@ -81,13 +83,34 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         h.set(path, &field.trim().to_ascii_lowercase(), value.trim())?;
     }
     let attached = data_offset != usize::MAX;
+    let (several, count) = if h.dimension == Some(4) {
+        h.split_4d(path)?
+    } else {
+        (super::Several::Frames, 1)
+    };
+    let (frame, component) = match several {
+        super::Several::Frames => (super::choose(path, several, count, opts)?, 0),
+        super::Several::Components => (0, super::choose(path, several, count, opts)?),
+    };
+    let chosen = frame.max(component);
+    super::choose(
+        path,
+        match several {
+            super::Several::Frames => super::Several::Components,
+            super::Several::Components => super::Several::Frames,
+        },
+        1,
+        opts,
+    )?;
     let dimension = h
         .dimension
         .ok_or_else(|| invalid(path, "missing 'dimension'"))?;
     if !(1..=3).contains(&dimension) {
         return Err(invalid(
             path,
-            format!("dimension {dimension} is not supported (scalar volumes of dimension 1 to 3)"),
+            format!(
+                "dimension {dimension} is not supported (volumes of dimension 1 to 3, or 4 with a vector or time axis)"
+            ),
         ));
     }
     let sizes = h.sizes.ok_or_else(|| invalid(path, "missing 'sizes'"))?;
@@ -182,7 +205,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             }
         }
     }
-    let n = check_dims(path, dims, ty, opts)?;
+    let voxels = check_dims(path, dims, ty, opts)?;
+    // Every frame or component is read, one kept (NRRD's sizes are exact).
+    let n = match dims[0].checked_mul(count) {
+        Some(x) => check_dims(path, [x, dims[1], dims[2]], ty, opts)?,
+        None => return Err(invalid(path, format!("{count} volumes overflow"))),
+    };
 
     // Where the data is.
     let (data_file, mut offset) = match &h.data_file {
@@ -248,10 +276,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         tail: Tail::Error,
     };
     let (values, mut warnings) = read_data(path, &spec)?;
+    let values = super::select(values, voxels, count, chosen, several);
     let format = format!(
-        "NRRD{} ({})",
+        "NRRD{} ({}{})",
         if attached { "" } else { " detached" },
-        encoding.name()
+        encoding.name(),
+        super::choice_note(several, chosen, count)
     );
     let mut origin = [0.0; 3];
     for (o, x) in origin.iter_mut().zip(h.origin.iter().flatten()) {
@@ -287,9 +317,55 @@ struct Header {
     byte_skip: i64,
     line_skip: u64,
     data_file: Option<String>,
+    kinds: Option<Vec<String>>,
 }
 
 impl Header {
+    /// A 4D header made 3D: which axis (0: components, 3: frames) holds
+    /// several volumes, and how many, found from `kinds` (the axis that is
+    /// not `domain` or `space`), else from `space directions` (the axis
+    /// whose direction is `none`). That axis is removed from the sizes,
+    /// spacings and directions.
+    fn split_4d(&mut self, path: &Path) -> Result<(super::Several, usize), ReadError> {
+        let spatial = |k: &str| matches!(k.to_ascii_lowercase().as_str(), "domain" | "space");
+        let extra: Vec<usize> = if let Some(kinds) = self.kinds.as_ref().filter(|k| k.len() == 4) {
+            (0..4).filter(|&a| !spatial(&kinds[a])).collect()
+        } else if let Some(dirs) = self.directions.as_ref().filter(|d| d.len() == 4) {
+            (0..4).filter(|&a| dirs[a].is_none()).collect()
+        } else {
+            Vec::new()
+        };
+        let axis = match extra[..] {
+            [a @ (0 | 3)] => a,
+            _ => {
+                return Err(invalid(
+                    path,
+                    "dimension 4: no single non-spatial first or last axis in 'kinds' or \
+                     'space directions' (a vector axis first, or a time axis last, is read)",
+                ));
+            }
+        };
+        let sizes = self
+            .sizes
+            .as_mut()
+            .filter(|s| s.len() == 4)
+            .ok_or_else(|| invalid(path, "'sizes' needs 4 numbers for dimension 4"))?;
+        let count = sizes.remove(axis);
+        if let Some(d) = self.directions.as_mut().filter(|d| d.len() == 4) {
+            d.remove(axis);
+        }
+        if let Some(sp) = self.spacings.as_mut().filter(|s| s.len() == 4) {
+            sp.remove(axis);
+        }
+        self.dimension = Some(3);
+        let what = if axis == 0 {
+            super::Several::Components
+        } else {
+            super::Several::Frames
+        };
+        Ok((what, count))
+    }
+
     fn set(&mut self, path: &Path, field: &str, value: &str) -> Result<(), ReadError> {
         let bad = |what: &str| {
             invalid(
@@ -338,7 +414,8 @@ impl Header {
             "byte skip" => self.byte_skip = value.parse().map_err(|_| bad("not a number"))?,
             "line skip" => self.line_skip = value.parse().map_err(|_| bad("not a number"))?,
             "data file" | "datafile" => self.data_file = Some(value.to_owned()),
-            _ => {} // content, kinds, measurement frame, ...: not needed.
+            "kinds" => self.kinds = Some(value.split_whitespace().map(str::to_owned).collect()),
+            _ => {} // content, measurement frame, ...: not needed.
         }
         Ok(())
     }

@@ -3,7 +3,8 @@
 //! natural file-name order (`slice2` before `slice10`). Files with other
 //! extensions are ignored; every slice must have the first slice's size
 //! and type. A single PNG reads as a volume of depth 1; a single TIFF with
-//! all its pages (a multi-page TIFF is a 3D volume).
+//! all its pages (a multi-page TIFF is a 3D volume). A folder of DICOM
+//! files is one series, read by [`super::dicom`].
 
 use super::{ReadError, ReadOptions, ScalarType, Volume, check_dims, finish, invalid, io_error};
 use crate::field::Values;
@@ -21,16 +22,33 @@ fn is_slice(p: &Path) -> bool {
 pub fn read(dir: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let entries = std::fs::read_dir(dir).map_err(|e| io_error(dir, e))?;
     let mut files: Vec<PathBuf> = Vec::new();
+    let mut dicom: Vec<PathBuf> = Vec::new();
     for e in entries {
         let p = e.map_err(|e| io_error(dir, e))?.path();
         if is_slice(&p) {
             files.push(p);
+        } else if super::dicom::is_dicom_file(&p) {
+            dicom.push(p);
         }
+    }
+    if !dicom.is_empty() {
+        if !files.is_empty() {
+            return Err(invalid(
+                dir,
+                format!(
+                    "holds both DICOM files ({}) and PNG/TIFF slices ({}): give a folder of one kind",
+                    dicom.len(),
+                    files.len()
+                ),
+            ));
+        }
+        dicom.sort_by(|a, b| super::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+        return super::dicom::read_series(dir, &dicom, opts);
     }
     if files.is_empty() {
         return Err(invalid(
             dir,
-            "is a directory without PNG or TIFF slices (give a volume file, or a folder of slices)",
+            "is a directory without PNG or TIFF slices or DICOM files (give a volume file, or a folder of slices)",
         ));
     }
     files.sort_by(|a, b| {

@@ -150,6 +150,8 @@ struct Layout {
     /// How each compressed block is coded (when `zlib`, i.e. compressed).
     codec: Codec,
     array_type: ScalarType,
+    /// `NumberOfComponents`: interleaved, one is read.
+    components: usize,
     format: String,
     /// Inline text between `<DataArray>` and `</DataArray>` (ascii, binary).
     inline: Option<(usize, usize)>,
@@ -177,7 +179,16 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         }
     };
     let ty = layout.array_type;
-    let n = check_dims(path, layout.dims, ty, opts)?;
+    super::choose(path, super::Several::Frames, 1, opts)?;
+    let comps = layout.components;
+    let component = super::choose(path, super::Several::Components, comps, opts)?;
+    let voxels = check_dims(path, layout.dims, ty, opts)?;
+    // Components are interleaved (the fastest axis): all are read, one kept.
+    let d = layout.dims;
+    let n = match d[0].checked_mul(comps) {
+        Some(x) => check_dims(path, [x, d[1], d[2]], ty, opts)?,
+        None => return Err(invalid(path, format!("{comps} components overflow"))),
+    };
     let expected = n as u64 * ty.size() as u64;
     let hw = if layout.header_u64 { 8 } else { 4 };
     let err = |e: DataError| data::describe(path, Encoding::Raw, e);
@@ -283,13 +294,15 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             ));
         }
     };
+    let values = super::select(values, voxels, comps, component, super::Several::Components);
     let format = format!(
-        "VTK XML ImageData ({how}{})",
+        "VTK XML ImageData ({how}{}{})",
         if layout.zlib {
             format!(", {}", layout.codec.name())
         } else {
             String::new()
-        }
+        },
+        super::choice_note(super::Several::Components, component, comps)
     );
     let mut warnings = warnings;
     let geometry = geometry_or_warn(layout.origin, layout.axes, Space::Unnamed, &mut warnings);
@@ -523,14 +536,18 @@ fn finish_scan(
             ));
         }
     };
-    if let Some(c) = array.attr("NumberOfComponents")
-        && c != "1"
-    {
-        return Err(invalid(
-            path,
-            format!("DataArray with {} components is not supported", clip(c)),
-        ));
-    }
+    let components = match array.attr("NumberOfComponents").map(str::trim) {
+        None => 1,
+        Some(c) => match c.parse::<usize>() {
+            Ok(k) if k >= 1 => k,
+            _ => {
+                return Err(invalid(
+                    path,
+                    format!("bad DataArray NumberOfComponents '{}'", clip(c)),
+                ));
+            }
+        },
+    };
     let offset = match array.attr("offset") {
         Some(o) => o
             .trim()
@@ -557,6 +574,7 @@ fn finish_scan(
         zlib,
         codec,
         array_type,
+        components,
         format: array.attr("format").unwrap_or("ascii").to_owned(),
         inline,
         offset,

@@ -79,6 +79,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let mut origin = [0.0f64; 3];
     let mut point_data: Option<usize> = None;
     let mut scalar_type: Option<ScalarType> = None;
+    let mut components = 1usize;
     for line in it {
         let mut tok = line.split_whitespace();
         let kw = tok.next().unwrap_or("").to_ascii_uppercase();
@@ -163,28 +164,23 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                         ));
                     }
                 };
-                if let Some(c) = rest.get(2)
-                    && *c != "1"
-                {
-                    return Err(invalid(
-                        path,
-                        format!("SCALARS with {} components is not supported", clip(c)),
-                    ));
+                if let Some(c) = rest.get(2) {
+                    components = c
+                        .parse()
+                        .ok()
+                        .filter(|&k: &usize| (1..=4).contains(&k))
+                        .ok_or_else(|| bad("SCALARS components must be 1 to 4"))?;
                 }
                 scalar_type = Some(ty);
             }
             "LOOKUP_TABLE" => {}
             "COLOR_SCALARS" if point_data.is_some() && scalar_type.is_none() => {
-                if let Some(c) = rest.get(1)
-                    && *c != "1"
-                {
-                    return Err(invalid(
-                        path,
-                        format!(
-                            "COLOR_SCALARS with {} components is not supported (scalar data only)",
-                            clip(c)
-                        ),
-                    ));
+                if let Some(c) = rest.get(1) {
+                    components = c
+                        .parse()
+                        .ok()
+                        .filter(|&k: &usize| k >= 1)
+                        .ok_or_else(|| bad("COLOR_SCALARS needs a number of values"))?;
                 }
                 scalar_type = Some(match encoding {
                     Encoding::Ascii => ScalarType::F32,
@@ -213,6 +209,13 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let dims = dims.ok_or_else(|| invalid(path, "missing DIMENSIONS"))?;
     let ty = scalar_type.ok_or_else(|| invalid(path, "missing SCALARS"))?;
     let n = check_dims(path, dims, ty, opts)?;
+    super::choose(path, super::Several::Frames, 1, opts)?;
+    let component = super::choose(path, super::Several::Components, components, opts)?;
+    // Components are interleaved (the fastest axis): all are read, one kept.
+    let stored = match dims[0].checked_mul(components) {
+        Some(x) => check_dims(path, [x, dims[1], dims[2]], ty, opts)?,
+        None => return Err(invalid(path, format!("{components} components overflow"))),
+    };
     if point_data != Some(n) {
         return Err(invalid(
             path,
@@ -229,17 +232,19 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         encoding,
         ty,
         big_endian: true,
-        count: n,
+        count: stored,
         tail: Tail::Ignore,
     };
     let (values, warnings) = read_data(path, &spec)?;
+    let values = super::select(values, n, components, component, super::Several::Components);
     let format = format!(
-        "VTK legacy ({})",
+        "VTK legacy ({}{})",
         if encoding == Encoding::Raw {
             "binary"
         } else {
             "ascii"
-        }
+        },
+        super::choice_note(super::Several::Components, component, components)
     );
     let geometry = Geometry {
         origin,
