@@ -2,7 +2,8 @@
 # Starts the real explorer under Xvfb with software Vulkan (Mesa lavapipe),
 # clicks and drags in it with xdotool like a user, and saves screenshots:
 #
-#   01_opened.png     the tree of the dataset, nothing selected
+#   01_opened.png     the first screen: the plateau level, the most
+#                     important branches as contours
 #   02_selected.png   two contours selected (click, shift-click on arcs)
 #   03_dragged.png    the first contour's marker dragged up its arc
 #   04_simplified.png the level moved on the simplification curve
@@ -86,7 +87,9 @@ for _ in $(seq 1 600); do
   sleep 0.5
 done
 grep -q '^arc ' "$DUMP" 2>/dev/null || fail "the dataset did not load in 300 s"
-sleep 2
+# The first screen's contours extract in the background: FLEXISO_SETTLE
+# seconds (default 2) before the first shot.
+sleep "${FLEXISO_SETTLE:-2}"
 
 shot() {
   alive || fail "the program died before $1"

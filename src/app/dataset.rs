@@ -9,11 +9,17 @@ use std::time::Duration;
 
 use crate::field::ScalarField;
 use crate::simplify::layout::TreeLayout;
+use crate::simplify::overview::{Feature, first_screen_step, important_branches};
 use crate::simplify::{CollapsedTree, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
 
-/// How many arcs the tree shows when a dataset opens.
+/// How many arcs the tree shows when no better level is known (a level
+/// asked for by a session; the first screen takes the curve's widest
+/// plateau instead, [`crate::simplify::overview::first_screen_step`]).
 pub const DEFAULT_ARCS: usize = 100;
+
+/// How many branches the first screen shows as contours at most.
+pub const FIRST_SCREEN_BRANCHES: usize = 6;
 
 /// Wall-clock times of the pipeline's stages.
 #[derive(Clone, Copy, Debug, Default)]
@@ -63,23 +69,46 @@ pub struct Dataset {
     /// The level to show first, made here because reaching it can replay
     /// millions of steps; the explorer takes it (so clones stay cheap).
     pub first_level: Option<SimplifiedTree>,
+    /// The most important branches at `first_level`, each with its
+    /// representative contour: what the first screen shows.
+    pub first_screen: Vec<Feature>,
     /// Stage times.
     pub times: StageTimes,
     /// Reader warnings.
     pub warnings: Vec<String>,
 }
 
+/// What the panels draw of a simplification.
+pub struct Views {
+    /// The tree layout.
+    pub layout: Arc<TreeLayout>,
+    /// The curve as drawn.
+    pub curve: Arc<Vec<[f64; 2]>>,
+    /// The level to show first.
+    pub level: SimplifiedTree,
+    /// The branches to show as contours there.
+    pub features: Vec<Feature>,
+}
+
 /// What the panels draw of a simplification: the tree layout, the curve,
-/// and the level of about `arcs` arcs.
-pub fn views(
-    sim: &Arc<Simplification>,
-    arcs: usize,
-) -> (Arc<TreeLayout>, Arc<Vec<[f64; 2]>>, Option<SimplifiedTree>) {
+/// the level of about `arcs` arcs (None: the first screen's, at the
+/// curve's widest plateau) and its most important branches (`range`: the
+/// field's values).
+pub fn views(sim: &Arc<Simplification>, arcs: Option<usize>, range: (f64, f64)) -> Views {
     let layout = Arc::new(TreeLayout::new(sim));
     let curve = Arc::new(drawn_curve(sim));
     let mut level = SimplifiedTree::new(Arc::clone(sim));
-    level.set_level(arcs);
-    (layout, curve, Some(level))
+    match arcs {
+        Some(n) => level.set_level(n),
+        None => level.set_step(first_screen_step(sim)),
+    }
+    let features = important_branches(&level, layout.branches(), range, FIRST_SCREEN_BRANCHES);
+    Views {
+        layout,
+        curve,
+        level,
+        features,
+    }
 }
 
 /// The curve of `sim` as the panel draws it: log10 feature size against

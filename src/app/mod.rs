@@ -51,13 +51,14 @@ use instrument::{FrameLog, UiDump};
 use jobs::betti::BettiJob;
 use jobs::dialog::{DialogAnswer, DialogJob, DialogKind};
 use jobs::export::Exports;
-use jobs::isosurface::AllContours;
+use jobs::isosurface::{AllContours, Scope};
+use jobs::preview::{Preview, PreviewState};
 use jobs::{Job, JobError, Notify};
 use panels::curve::CurvePanel;
 use panels::menu::{Action, Menu, Status};
 use panels::tree::TreePanel;
 use panels::view3d::{SceneKey, SceneMesh, View3d};
-use selection::{Selection, palette};
+use selection::{ContourId, Selection, palette};
 
 pub use jobs::pipeline::Request;
 pub use jobs::yield_to_ui;
@@ -123,6 +124,14 @@ pub struct FlexisoApp {
     recovered: bool,
     /// Slices and the clipping plane (see [`context`]).
     slices: panels::slices::SlicePanel,
+    /// A newly opened volume shows its most important branches as
+    /// contours (the window; tests start from an empty scene).
+    first_screen: bool,
+    /// The first screen's contours, to frame the 3D view on once their
+    /// meshes are in.
+    frame_pending: Vec<ContourId>,
+    /// The hover preview of the arc under the pointer.
+    preview: Preview,
 }
 
 impl FlexisoApp {
@@ -152,7 +161,6 @@ impl FlexisoApp {
             ui_ms: 0.0,
             ui_dump: None,
             sized_frames: 0,
-            notify,
             ctx: None,
             history: History::default(),
             confirm: None,
@@ -165,6 +173,10 @@ impl FlexisoApp {
             recovery_offer: None,
             recovered: false,
             slices: Default::default(),
+            first_screen: false,
+            frame_pending: Vec::new(),
+            preview: Preview::new(notify.clone()),
+            notify,
         }
     }
 
@@ -179,6 +191,7 @@ impl FlexisoApp {
         let notify: Notify = Arc::new(move || ctx.request_repaint());
         let mut app = Self::with_notify(Some(Arc::clone(&notify)));
         app.ctx = Some(cc.egui_ctx.clone());
+        app.first_screen = true;
         app.selection.extract_in_background(Some(notify));
         app.start(request);
         if let Some(p) = session::Recovery::default_path() {
@@ -196,7 +209,25 @@ impl FlexisoApp {
     /// window needed). Contours are extracted in background jobs as in the
     /// window: call [`FlexisoApp::wait_for_extractions`].
     pub fn new_for_test(field: ScalarField) -> Self {
+        let mut app = Self::run_for_test(field, false);
+        // The interaction tests start from the level of DEFAULT_ARCS arcs
+        // and an empty scene, as before the first screen existed.
+        if let Some(level) = &mut app.level {
+            level.set_level(DEFAULT_ARCS);
+        }
+        app
+    }
+
+    /// An explorer on `field` as the window opens it: the first screen's
+    /// level (the curve's widest plateau) and its most important branches
+    /// selected as contours (tests).
+    pub fn new_for_test_first_screen(field: ScalarField) -> Self {
+        Self::run_for_test(field, true)
+    }
+
+    fn run_for_test(field: ScalarField, first_screen: bool) -> Self {
         let mut app = Self::empty();
+        app.first_screen = first_screen;
         app.selection.extract_in_background(None);
         let result = jobs::pipeline::run(
             Request::Field {
@@ -380,6 +411,8 @@ impl FlexisoApp {
             self.global_h = 0.5 * (lo + hi);
             self.selection.clear();
             self.all = AllContours::new(self.notify.clone());
+            self.preview = Preview::new(self.notify.clone());
+            self.frame_pending.clear();
             let (min, max) = crate::render::grid_bounds(ds.field.dims(), ds.field.spacing());
             self.view3d.set_bounds(min, max);
             self.tree_panel.reset();
@@ -409,7 +442,110 @@ impl FlexisoApp {
         }
         if let Some(s) = self.pending_session.take() {
             self.apply_session(&s);
+        } else if !same_field && self.first_screen {
+            self.show_first_screen();
+            // What the program chose is not the user's work: closing the
+            // first screen unchanged asks nothing.
+            if let Some(scene) = self.scene_now() {
+                self.history.observe(scene, false, Instant::now());
+                self.history.mark_saved();
+            }
         }
+    }
+
+    /// Selects the first screen's contours: the most important branches
+    /// of the level shown, each in its own colour at its representative
+    /// isovalue ([`crate::simplify::overview`]); the 3D view frames them
+    /// once their meshes arrive.
+    fn show_first_screen(&mut self) {
+        let (Some(ds), Some(level)) = (&self.dataset, &self.level) else {
+            return;
+        };
+        let mut ids = Vec::new();
+        for f in &ds.first_screen {
+            let la = level.arc(f.arc);
+            let iso = crate::field::Isovalue::new(f.h);
+            if let Some(seed) =
+                crate::contour::path_seed_in_chain(&ds.tree, &ds.field, la.chain, iso)
+            {
+                ids.push(
+                    self.selection
+                        .add(&ds.field, &ds.tree, seed.arc, f.h, false),
+                );
+            }
+        }
+        self.selection.active = None;
+        self.frame_pending = ids;
+    }
+
+    /// Frames the 3D view on the first screen's contours once every one
+    /// of them has its mesh (or has none).
+    fn frame_first_screen(&mut self) {
+        if self.frame_pending.is_empty() {
+            return;
+        }
+        let contours: Vec<&selection::Contour> = self
+            .frame_pending
+            .iter()
+            .filter_map(|id| self.selection.get(*id))
+            .collect();
+        if contours.iter().any(|c| c.extracting()) {
+            return;
+        }
+        let mut lo = glam::Vec3::splat(f32::INFINITY);
+        let mut hi = glam::Vec3::splat(f32::NEG_INFINITY);
+        for m in contours.iter().filter_map(|c| c.gpu.as_ref()) {
+            lo = lo.min(m.bbox.0);
+            hi = hi.max(m.bbox.1);
+        }
+        if lo.cmple(hi).all() {
+            self.view3d.fit_to(lo.to_array(), hi.to_array());
+        }
+        self.frame_pending.clear();
+    }
+
+    /// The first screen's contours still to be framed (tests).
+    pub fn framing_pending(&self) -> bool {
+        !self.frame_pending.is_empty()
+    }
+
+    /// The hover preview (tests).
+    pub fn preview(&self) -> &Preview {
+        &self.preview
+    }
+
+    /// Waits for the hover preview in flight (tests).
+    pub fn wait_for_preview(&mut self) {
+        self.preview.wait();
+    }
+
+    /// Keeps the hover preview on the arc under the pointer: the contour a
+    /// click there would select, extracted by a job; none while dragging
+    /// or when no arc is hovered.
+    fn update_preview(&mut self, pointer_down: bool) {
+        self.preview.poll();
+        let hovered = self.tree_panel.hovered.filter(|_| !pointer_down);
+        let (Some(ds), Some(level), Some(arc)) = (&self.dataset, &self.level, hovered) else {
+            self.preview.clear();
+            self.tree_panel.preview_note = None;
+            return;
+        };
+        match TreePanel::contour_of_arc(ds, level, arc, self.global_h) {
+            Some((s, h)) => self.preview.request(&ds.field, &ds.tree, s, h),
+            None => self.preview.clear(),
+        }
+        self.tree_panel.preview_note = match self.preview.state {
+            PreviewState::Off => None,
+            PreviewState::Extracting => Some("preview: extracting…".into()),
+            PreviewState::Ready if self.preview.mesh.is_some() => {
+                Some("preview: dimmed in the 3D view".into())
+            }
+            PreviewState::Ready => Some("preview: no contour there".into()),
+            PreviewState::Skipped => Some(format!(
+                "preview skipped: the contour takes over {} ms to extract",
+                jobs::preview::PREVIEW_BUDGET.as_millis()
+            )),
+        };
     }
 
     /// The Betti numbers of the dataset shown, once computed.
@@ -543,13 +679,39 @@ impl FlexisoApp {
         if !self.show_all || pointer_down {
             return;
         }
-        self.all.request(&ds.tree, &ds.field, self.global_h);
+        let h = self.global_h;
+        let scope = match &self.level {
+            Some(level) if !self.menu.every_component => {
+                let key = AllContours::key_of(&ds.field, h, Some(level.step()));
+                if !self.all.wants(key) {
+                    return;
+                }
+                Scope::Arcs {
+                    step: level.step(),
+                    superarcs: spanning_superarcs(ds, level, h),
+                }
+            }
+            _ => Scope::Every,
+        };
+        self.all.request(&ds.tree, &ds.field, h, scope);
+    }
+
+    /// "All contours at h" shows every component of the level set (true)
+    /// or one contour per arc of the shown tree spanning h (false, the
+    /// default).
+    pub fn set_every_component(&mut self, on: bool) {
+        self.menu.every_component = on;
     }
 
     /// Waits for the "all contours at h" extraction in flight (tests).
     pub fn wait_for_all_contours(&mut self, _ctx: &egui::Context) {
         self.all.wait();
         self.update_all_contours(false);
+    }
+
+    /// The superarcs of the contours "all contours at h" shows (tests).
+    pub fn all_contour_arcs(&self) -> Vec<crate::tree::ArcId> {
+        self.all.meshes.iter().map(|m| m.arc).collect()
     }
 
     /// Number of contours shown by "all contours at h".
@@ -612,6 +774,16 @@ impl FlexisoApp {
                 });
             }
         }
+        if let Some(m) = &self.preview.mesh {
+            scene.push(SceneMesh {
+                key: SceneKey::Preview,
+                mesh: Arc::clone(m),
+                version: self.preview.version,
+                colour: Color32::from_rgba_unmultiplied(235, 235, 235, 90),
+                visible: true,
+                highlighted: false,
+            });
+        }
         if self.show_all {
             let faded = !self.selection.contours.is_empty();
             for (i, m) in self.all.gpu.iter().enumerate() {
@@ -645,6 +817,7 @@ impl FlexisoApp {
     fn picked(&mut self, key: SceneKey, shift: bool) {
         match key {
             SceneKey::Contour(id) => self.selection.active = Some(id),
+            SceneKey::Preview => {}
             SceneKey::AtH(i) => {
                 if let (Some(ds), Some(m)) = (&self.dataset, self.all.meshes.get(i)) {
                     self.selection
@@ -697,7 +870,8 @@ impl FlexisoApp {
             extracting: self.selection.extracting(),
             all: (
                 self.show_all,
-                self.all.extracting(),
+                // Done only once the meshes are on screen (uploaded).
+                self.all.extracting() || (self.show_all && self.view3d.uploading),
                 self.all.meshes.len(),
                 self.all.millis,
             ),
@@ -725,6 +899,12 @@ impl FlexisoApp {
         ui.separator();
         self.curve_panel.ui(ui, level, &ds.curve);
     }
+
+    /// Waits for the "all contours at h" meshes to be uploaded (tests with
+    /// a renderer): true when none is pending.
+    pub fn all_contours_on_screen(&self) -> bool {
+        !self.all.extracting() && !self.view3d.uploading
+    }
 }
 
 impl eframe::App for FlexisoApp {
@@ -738,6 +918,7 @@ impl eframe::App for FlexisoApp {
         self.poll_exports();
         self.betti.poll();
         self.selection.poll();
+        self.frame_first_screen();
         self.handle_input(ui);
         let rs = frame.wgpu_render_state().cloned();
         let pointer_down = ui.input(|i| i.pointer.any_down());
@@ -756,6 +937,7 @@ impl eframe::App for FlexisoApp {
             }
         }
         tree.show(ui, |ui| self.tree_and_curve(ui));
+        self.update_preview(pointer_down || self.tree_panel.dragging());
         // A fixed width: the 3D view does not move as the list's text
         // changes.
         egui::Panel::right("selection")
@@ -763,12 +945,18 @@ impl eframe::App for FlexisoApp {
             .exact_size(CONTOUR_PANEL_WIDTH)
             .show(ui, |ui| {
                 let tree = self.dataset.as_ref().map(|d| Arc::clone(&d.tree));
-                panels::contour_list::ui(
+                let layout = self.dataset.as_ref().map(|d| Arc::clone(&d.layout));
+                let go_to = panels::contour_list::ui(
                     ui,
                     &mut self.selection,
                     tree.as_deref(),
                     self.level.as_ref(),
+                    layout.as_deref().map(|l| l.branches()),
                 );
+                if let (Some(step), Some(level)) = (go_to, &self.level) {
+                    let sim = Arc::clone(level.simplification());
+                    self.curve_panel.go_to_step(step, &sim);
+                }
             });
         let mut view_rect = egui::Rect::NOTHING;
         egui::CentralPanel::default()
@@ -815,4 +1003,23 @@ impl eframe::App for FlexisoApp {
             log.frame(self.ui_ms, &stage);
         }
     }
+}
+
+/// The superarcs whose contours at `h` the arcs of `level` spanning `h`
+/// stand for, one per arc, sorted.
+fn spanning_superarcs(ds: &Dataset, level: &SimplifiedTree, h: f64) -> Vec<crate::tree::ArcId> {
+    let sim = level.simplification();
+    let iso = crate::field::Isovalue::new(h);
+    let mut out: Vec<crate::tree::ArcId> = level
+        .arcs()
+        .filter(|a| {
+            let (vu, vl) = (sim.node_value(a.upper), sim.node_value(a.lower));
+            vl <= h && h < vu
+        })
+        .filter_map(|a| crate::contour::path_seed_in_chain(&ds.tree, &ds.field, a.chain, iso))
+        .map(|s| s.arc)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
 }

@@ -284,9 +284,10 @@ impl Selection {
 
     /// Puts the contours of `group` at `positions` (superarc, isovalue):
     /// contour `lead` takes the first, the other members the next ones,
-    /// new members (same colour) any extra, and members left over are
-    /// removed (contours that met at a node merged). Only contours that
-    /// moved are re-extracted.
+    /// new members any extra (each in a colour of its own, so the pieces
+    /// of a split tell apart in the view and on the tree), and members
+    /// left over are removed (contours that met at a node merged). Only
+    /// contours that moved are re-extracted.
     pub fn set_group(
         &mut self,
         field: &Arc<ScalarField>,
@@ -311,13 +312,11 @@ impl Selection {
             match members.get(i) {
                 Some(&id) => self.move_to(field, tree, id, superarc, h),
                 None => {
-                    let colour = self.get(lead).map(|c| c.colour);
+                    // add() gives it the first palette colour no contour
+                    // has.
                     let id = self.add(field, tree, superarc, h, false);
                     if let Some(c) = self.get_mut(id) {
                         c.group = group;
-                        if let Some(col) = colour {
-                            c.colour = col;
-                        }
                     }
                 }
             }

@@ -40,6 +40,7 @@ pub mod collapse;
 pub mod json;
 pub mod layout;
 mod level_set;
+pub mod overview;
 
 pub use crate::measure::geometric::Measure;
 pub use collapse::CollapsedTree;

@@ -1,24 +1,44 @@
-//! "All contours at h": every contour at the global isovalue, one mesh per
-//! component, extracted by a job (a whole isosurface of a big volume takes
-//! seconds on a small machine; the window keeps drawing meanwhile). One
-//! extraction at a time; a value asked for while one runs is extracted
-//! when it ends (the latest value wins).
+//! "All contours at h": the contours at the global isovalue, extracted by
+//! a job (a whole isosurface of a big volume takes seconds on a small
+//! machine; the window keeps drawing meanwhile). By default one contour
+//! per arc of the *shown* (simplified) tree that spans h, the contour the
+//! tree's arc stands for ([`Scope::Arcs`]: what the tree shows is what
+//! the view shows); optionally every component of the level set
+//! ([`Scope::Every`], noise included). One extraction at a time; a value
+//! asked for while one runs is extracted when it ends (the latest value
+//! wins).
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::extraction::extract_mesh;
 use super::{Job, Notify};
 use crate::app::ids::prepare;
-use crate::contour::{ContourMesh, all_contours};
+use crate::contour::{ContourMesh, FollowerScratch, all_contours};
 use crate::field::Isovalue;
 use crate::field::ScalarField;
 use crate::render::PreparedMesh;
 use crate::tree::ContourTree;
 
-/// What an extraction is of: (isovalue bits, field pointer).
-pub type Key = (u64, usize);
+/// What an extraction is of: (isovalue bits, field pointer, scope: 0 for
+/// every component, else 1 + the level's step).
+pub type Key = (u64, usize, u64);
+
+/// Which contours at h.
+pub enum Scope {
+    /// Every component of the level set.
+    Every,
+    /// The contours of these superarcs (one per arc of the shown tree
+    /// spanning h), at the level after `step` steps.
+    Arcs {
+        /// The level's step (tells levels apart).
+        step: usize,
+        /// The superarcs.
+        superarcs: Vec<crate::tree::ArcId>,
+    },
+}
 
 /// An extraction's outcome: its key, the meshes (each with the same ready
 /// for the GPU), milliseconds.
@@ -92,18 +112,57 @@ impl AllContours {
         self.version += 1;
     }
 
-    /// Starts extracting the contours at `h` unless they are shown or
-    /// one extraction already runs.
-    pub fn request(&mut self, tree: &Arc<ContourTree>, field: &Arc<ScalarField>, h: f64) {
-        let key = (h.to_bits(), Arc::as_ptr(field) as usize);
-        if self.key == Some(key) || self.pending.is_some() {
+    /// The key of the contours at `h` of `field` in scope `step` (None:
+    /// every component; see [`Key`]).
+    pub fn key_of(field: &Arc<ScalarField>, h: f64, step: Option<usize>) -> Key {
+        (
+            h.to_bits(),
+            Arc::as_ptr(field) as usize,
+            step.map_or(0, |s| s as u64 + 1),
+        )
+    }
+
+    /// True when the contours of `key` are neither shown nor coming and
+    /// no extraction runs (a request would start one).
+    pub fn wants(&self, key: Key) -> bool {
+        self.key != Some(key) && self.pending.is_none()
+    }
+
+    /// Starts extracting the contours at `h` in `scope` unless they are
+    /// shown or one extraction already runs.
+    pub fn request(
+        &mut self,
+        tree: &Arc<ContourTree>,
+        field: &Arc<ScalarField>,
+        h: f64,
+        scope: Scope,
+    ) {
+        let step = match &scope {
+            Scope::Every => None,
+            Scope::Arcs { step, .. } => Some(*step),
+        };
+        let key = Self::key_of(field, h, step);
+        if !self.wants(key) {
             return;
         }
         self.pending = Some(key);
         let (tree, field) = (Arc::clone(tree), Arc::clone(field));
         self.job.start("all contours at h", move |_| {
             let t = Instant::now();
-            let meshes: Vec<_> = all_contours(&tree, &field, Isovalue::new(h))
+            let contours = match scope {
+                Scope::Every => all_contours(&tree, &field, Isovalue::new(h)),
+                Scope::Arcs { superarcs, .. } => superarcs
+                    .into_par_iter()
+                    // One follower's tables per worker thread, reused.
+                    .map_init(FollowerScratch::default, |scratch, s| {
+                        extract_mesh(&field, &tree, s, h, scratch, None, &|| false)
+                            .ok()
+                            .flatten()
+                    })
+                    .flatten()
+                    .collect(),
+            };
+            let meshes: Vec<_> = contours
                 .into_par_iter()
                 .filter(|m| !m.indices.is_empty())
                 .filter_map(|m| Some((prepare(&m)?, m)))

@@ -19,6 +19,7 @@ pub mod export;
 pub mod extraction;
 pub mod isosurface;
 pub mod pipeline;
+pub mod preview;
 
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};

@@ -16,7 +16,7 @@ use crate::simplify::{CollapsedTree, Measure, Simplification};
 use crate::tree::ContourTree;
 
 use super::JobError;
-use crate::app::dataset::{DEFAULT_ARCS, Dataset, StageTimes, views};
+use crate::app::dataset::{Dataset, StageTimes, views};
 
 /// What a job computes.
 pub enum Request {
@@ -64,15 +64,16 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
             let simplify = t.elapsed();
             progress.stage("layout");
             let t = Instant::now();
-            let (layout, curve, first_level) = views(&sim, arcs);
+            let v = views(&sim, Some(arcs), ds.range);
             let mut times = ds.times;
             times.simplify = simplify;
             times.layout = t.elapsed();
             return Ok(Dataset {
                 sim,
-                layout,
-                curve,
-                first_level,
+                layout: v.layout,
+                curve: v.curve,
+                first_level: Some(v.level),
+                first_screen: v.features,
                 times,
                 ..*ds
             });
@@ -123,14 +124,14 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
     }
     progress.stage("layout");
     let t = Instant::now();
-    let (layout, curve, first_level) = views(&sim, DEFAULT_ARCS);
+    let range = field.range();
+    let v = views(&sim, None, range);
     let times = StageTimes {
         load,
         tree: tree_time,
         simplify,
         layout: t.elapsed(),
     };
-    let range = field.range();
     Ok(Dataset {
         name,
         path,
@@ -140,9 +141,10 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
         tree: Arc::new(tree),
         collapsed: Arc::new(collapsed),
         sim,
-        layout,
-        curve,
-        first_level,
+        layout: v.layout,
+        curve: v.curve,
+        first_level: Some(v.level),
+        first_screen: v.features,
         times,
         warnings,
     })

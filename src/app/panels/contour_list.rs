@@ -3,33 +3,55 @@
 //! they arrive from the extraction jobs. A contour with no live arc at the
 //! shown level (its branch pruned and no arc left where it was absorbed)
 //! is listed as hidden by simplification: its marker is not drawn until a
-//! finer level shows its arc again.
+//! finer level shows its arc again. A "show its arc" button on such a
+//! contour (and on one whose marker sits on the arc that absorbed it) is
+//! the way back: it moves the level to the coarsest one where the
+//! contour's own arc is shown.
 
 use egui::{Color32, RichText};
 
 use crate::app::format::fmt_value;
 use crate::app::selection::Selection;
 use crate::simplify::SimplifiedTree;
+use crate::simplify::branches::Branches;
 use crate::tree::ContourTree;
 
 /// The note on a contour the simplification hides.
 pub const HIDDEN: &str = "hidden by simplification";
 
+/// The label of the way back to a hidden contour's arc.
+pub const SHOW_ARC: &str = "show its arc";
+
+/// The coarsest level (steps) at which the arc of original superarc `s`
+/// is shown: the step that prunes its branch (None when it is never
+/// pruned, or has zero height).
+pub fn coarsest_step_showing(
+    level: &SimplifiedTree,
+    branches: &Branches,
+    s: crate::tree::ArcId,
+) -> Option<usize> {
+    let b = branches.of_superarc(level.simplification(), s)?;
+    ((b.0 as usize) < branches.steps()).then_some(b.0 as usize)
+}
+
 /// Draws the list; edits the selection (colour, visibility, isolation,
 /// removal, the active contour); `level` tells which contours the
-/// simplification hides.
+/// simplification hides. Returns the step to move the level to when a
+/// "show its arc" button was clicked.
 pub fn ui(
     ui: &mut egui::Ui,
     selection: &mut Selection,
     tree: Option<&ContourTree>,
     level: Option<&SimplifiedTree>,
-) {
+    branches: Option<&Branches>,
+) -> Option<usize> {
     ui.heading("Contours");
     if selection.contours.is_empty() {
         ui.label("Click an arc in the tree (shift-click adds), or a surface.");
         ui.label("Drag a marker to move its isovalue.");
-        return;
+        return None;
     }
+    let mut go_to = None;
     ui.horizontal(|ui| {
         if ui
             .button("Clear")
@@ -76,10 +98,30 @@ pub fn ui(
                             selection.active = Some(c.id);
                         }
                     });
-                    if level.is_some_and(|l| l.absorbing_arc_of(c.superarc).is_none()) {
-                        ui.label(RichText::new(HIDDEN).weak()).on_hover_text(
-                            "its branch is pruned at this level: a finer level (more arcs) shows its marker again",
-                        );
+                    if let Some(l) = level
+                        && l.live_arc_of(c.superarc).is_none()
+                    {
+                        let hidden = l.absorbing_arc_of(c.superarc).is_none();
+                        ui.horizontal(|ui| {
+                            if hidden {
+                                ui.label(RichText::new(HIDDEN).weak()).on_hover_text(
+                                    "its branch is pruned at this level: a finer level (more arcs) shows its marker again",
+                                );
+                            } else {
+                                ui.label(RichText::new("on the arc that absorbed it").weak());
+                            }
+                            if let Some(step) =
+                                branches.and_then(|b| coarsest_step_showing(l, b, c.superarc))
+                                && ui
+                                    .small_button(SHOW_ARC)
+                                    .on_hover_text(
+                                        "move to the coarsest level where this contour's own arc is shown",
+                                    )
+                                    .clicked()
+                            {
+                                go_to = Some(step);
+                            }
+                        });
                     }
                     ui.add(
                         egui::TextEdit::singleline(&mut c.name)
@@ -178,6 +220,7 @@ pub fn ui(
         Some((_, false)) => show_all(selection),
         None => {}
     }
+    go_to
 }
 
 /// Ends isolation: every contour visible again.

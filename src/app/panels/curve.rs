@@ -130,6 +130,13 @@ fn step_plot(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
 }
 
 impl CurvePanel {
+    /// Moves the level to step `step` of `sim` over the next frames (the
+    /// contour list's "show its arc").
+    pub fn go_to_step(&mut self, step: usize, sim: &std::sync::Arc<Simplification>) {
+        self.target = Some((step, std::sync::Arc::as_ptr(sim) as usize));
+        self.arcs_note = None;
+    }
+
     /// Moves `level` towards step `target` by at most `steps_per_frame`
     /// steps, asking for another frame until it is there.
     fn approach(&mut self, ui: &egui::Ui, level: &mut SimplifiedTree, target: usize) {

@@ -103,6 +103,9 @@ pub struct Menu {
     path_input: String,
     /// Where the "all contours at h" checkbox was drawn (scripts).
     pub all_checkbox: Option<egui::Rect>,
+    /// "All contours at h" shows every component of the level set, not
+    /// one per arc of the shown tree.
+    pub every_component: bool,
     /// The Edit menu's entries.
     pub edit: EditState,
     /// The View menu's switches.
@@ -234,8 +237,16 @@ impl Menu {
                         .text("isovalue")
                         .custom_formatter(|v, _| fmt_value(v)),
                 );
-                let r = ui.checkbox(show_all, "all contours at h");
+                let r = ui
+                    .checkbox(show_all, "all contours at h")
+                    .on_hover_text("one contour per arc of the shown tree that spans h");
                 self.all_checkbox = Some(r.rect);
+                if *show_all {
+                    ui.checkbox(&mut self.every_component, "every component")
+                        .on_hover_text(
+                            "every component of the level set, the simplification's noise included",
+                        );
+                }
             }
         });
         actions

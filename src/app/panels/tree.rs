@@ -11,11 +11,20 @@
 //! merge; at an extremum it stops); drag the
 //! dashed line moves the global isovalue; wheel zooms, right or middle
 //! drag pans, double-click resets the view.
+//!
+//! Hovering an arc says what it is: its values and costs, the size of the
+//! region its contours enclose (vertices and physical volume, from the
+//! collapsed tree's region summaries, [`crate::simplify::overview::arc_regions`]),
+//! where its contours lie (box and centroid of its vertices in the
+//! augmented tree, [`crate::simplify::overview::arc_extent`]), the genus
+//! of its contour, and (drawn by the app) a dimmed preview of that contour
+//! in the 3D view.
 
 use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2, pos2, vec2};
 
 use crate::contour::path_seed_in_chain;
 use crate::field::Isovalue;
+use crate::simplify::overview::{ArcSides, Extent, arc_extent, arc_regions};
 use crate::simplify::{SimplifiedArcId, SimplifiedNodeId, SimplifiedTree};
 
 use crate::app::dataset::Dataset;
@@ -71,6 +80,76 @@ pub struct TreePanel {
     pub hovered: Option<SimplifiedArcId>,
     /// Betti numbers of the superarcs' contours, once computed.
     pub betti: Option<std::sync::Arc<crate::measure::betti::ContourTopology>>,
+    /// What the hovered arc is (computed once per arc and level).
+    pub hover_info: Option<HoverInfo>,
+    /// A line on the hover preview in the 3D view (set by the app).
+    pub preview_note: Option<String>,
+}
+
+/// Vertices read at most to place a hovered arc's contours (a trunk arc
+/// of a big volume holds millions: a strided sample then).
+const EXTENT_BUDGET: usize = 1 << 20;
+
+/// What a hovered arc is: the sides of its contours and where they lie.
+#[derive(Clone, Debug)]
+pub struct HoverInfo {
+    /// The arc.
+    pub arc: SimplifiedArcId,
+    /// The level's step.
+    pub step: usize,
+    /// Vertices on either side of its contours.
+    pub sides: Option<ArcSides>,
+    /// Where its contours lie (grid indices).
+    pub extent: Option<Extent>,
+}
+
+impl HoverInfo {
+    /// The info of `arc` at `level`.
+    pub fn of(ds: &Dataset, level: &SimplifiedTree, arc: SimplifiedArcId) -> Self {
+        let sim = level.simplification();
+        HoverInfo {
+            arc,
+            step: level.step(),
+            sides: arc_regions(sim, &ds.collapsed, arc),
+            extent: arc_extent(&ds.tree, sim, ds.field.dims(), arc, EXTENT_BUDGET),
+        }
+    }
+
+    /// Lines for the tooltip: the enclosed region in vertices and
+    /// physical volume (`spacing` per axis), and the box and centre in
+    /// world units.
+    pub fn describe(&self, spacing: [f64; 3]) -> String {
+        let mut out = String::new();
+        let voxel = spacing[0] * spacing[1] * spacing[2];
+        if let Some(s) = self.sides {
+            let (n, above) = s.enclosed();
+            out.push_str(&format!(
+                "encloses {n} voxels ({} units³) {} its contours; {} on the other side",
+                fmt_value(n as f64 * voxel),
+                if above { "above" } else { "below" },
+                if above { s.below } else { s.above },
+            ));
+        }
+        if let Some(e) = self.extent {
+            let w = |k: usize, i: f64| i * spacing[k];
+            if !out.is_empty() {
+                out.push('\n');
+            }
+            out.push_str(&format!(
+                "lies in x {}..{}  y {}..{}  z {}..{}, centre ({}, {}, {})",
+                fmt_value(w(0, e.min[0] as f64)),
+                fmt_value(w(0, e.max[0] as f64)),
+                fmt_value(w(1, e.min[1] as f64)),
+                fmt_value(w(1, e.max[1] as f64)),
+                fmt_value(w(2, e.min[2] as f64)),
+                fmt_value(w(2, e.max[2] as f64)),
+                fmt_value(w(0, e.centroid[0])),
+                fmt_value(w(1, e.centroid[1])),
+                fmt_value(w(2, e.centroid[2])),
+            ));
+        }
+        out
+    }
 }
 
 /// Maps values and columns to the screen and back.
@@ -206,6 +285,18 @@ impl TreePanel {
         let frame = self.frame(rect, ds, level, sel);
         let pointer = response.hover_pos();
         self.hovered = pointer.and_then(|p| frame.nearest(p));
+        match self.hovered {
+            Some(a)
+                if self
+                    .hover_info
+                    .as_ref()
+                    .is_none_or(|i| i.arc != a || i.step != level.step()) =>
+            {
+                self.hover_info = Some(HoverInfo::of(ds, level, a));
+            }
+            Some(_) => {}
+            None => self.hover_info = None,
+        }
         self.interact(ui, &response, &frame, ds, level, sel, global_h);
 
         let painter = ui.painter_at(rect);
@@ -303,9 +394,16 @@ impl TreePanel {
                     .ok()
                     .and_then(|i| vertical(&paths[i]))
                     .map(|(x, _, _)| pos2(x, tf.screen(0.0, c.h.clamp(vl, vu)).y));
+                let mut pos = on_path.unwrap_or(pl + (pu - pl) * t);
+                // Never stacked: a marker on another's spot (contours of
+                // one arc at one value, e.g. absorbed by the same arc) goes
+                // beside it, so each can be seen and grabbed.
+                while markers.iter().any(|m: &Marker| m.pos.distance(pos) < 4.0) {
+                    pos.x += 13.0;
+                }
                 markers.push(Marker {
                     id: c.id,
-                    pos: on_path.unwrap_or(pl + (pu - pl) * t),
+                    pos,
                     colour: c.colour,
                     arc: a,
                 });
@@ -558,8 +656,15 @@ impl TreePanel {
             }
             None => "genus: computing…".into(),
         };
+        let what = self
+            .hover_info
+            .as_ref()
+            .filter(|i| i.arc == a)
+            .map(|i| i.describe(ds.field.spacing()))
+            .unwrap_or_default();
+        let preview = self.preview_note.clone().unwrap_or_default();
         format!(
-            "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\n{genus}\nclick: select its contour, shift-click: add",
+            "arc {}: values {} .. {}\nup cost {}  down cost {}\n{} superarc(s)\n{what}\n{genus}\n{preview}\nclick: select its contour, shift-click: add",
             a.0,
             fmt_value(vl),
             fmt_value(vu),
@@ -567,6 +672,26 @@ impl TreePanel {
             fmt_value(la.down_cost),
             la.chain.len(),
         )
+    }
+
+    /// The contour a click on live arc `arc` selects: (superarc,
+    /// isovalue) at `global_h` when the arc spans it, else at the middle
+    /// of its range.
+    pub fn contour_of_arc(
+        ds: &Dataset,
+        level: &SimplifiedTree,
+        arc: SimplifiedArcId,
+        global_h: f64,
+    ) -> Option<(crate::tree::ArcId, f64)> {
+        let sim = level.simplification();
+        let la = level.arc(arc);
+        let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
+        let h = if global_h >= vl && global_h < vu {
+            global_h
+        } else {
+            0.5 * (vl + vu)
+        };
+        path_seed_in_chain(&ds.tree, &ds.field, la.chain, Isovalue::new(h)).map(|s| (s.arc, h))
     }
 
     /// Selects the contour of live arc `arc`: at `global_h` when the arc
@@ -579,17 +704,14 @@ impl TreePanel {
         global_h: f64,
         replace: bool,
     ) {
-        let sim = level.simplification();
-        let la = level.arc(arc);
-        let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
-        let h = if global_h >= vl && global_h < vu {
-            global_h
-        } else {
-            0.5 * (vl + vu)
-        };
-        if let Some(seed) = path_seed_in_chain(&ds.tree, &ds.field, la.chain, Isovalue::new(h)) {
-            sel.add(&ds.field, &ds.tree, seed.arc, h, replace);
+        if let Some((s, h)) = Self::contour_of_arc(ds, level, arc, global_h) {
+            sel.add(&ds.field, &ds.tree, s, h, replace);
         }
+    }
+
+    /// True while something in the panel is dragged.
+    pub fn dragging(&self) -> bool {
+        self.drag.is_some()
     }
 
     /// Moves contour `id` (and the contours of its group) to value `v`
@@ -630,14 +752,22 @@ impl TreePanel {
                 }
             }
         }
-        let mut positions = Vec::new();
-        for a in arcs {
+        let mut positions: Vec<(crate::tree::ArcId, f64)> = Vec::new();
+        for (i, a) in arcs.into_iter().enumerate() {
             let la = level.arc(a);
             let (vu, vl) = (sim.node_value(la.upper), sim.node_value(la.lower));
+            // A contour other than the dragged one whose arc ends before
+            // `v` (at an extremum) has vanished there: it is dropped, not
+            // left as a point at the extremum. The dragged one stops at
+            // the end of its arc.
+            if i > 0 && !(vl..=vu).contains(&v) {
+                continue;
+            }
             // The contours of an arc exist at h + ε for h in [bottom, top).
             let top = vu - (vu - vl) * 1e-4;
             let h = v.clamp(vl, top.max(vl));
             if let Some(seed) = path_seed_in_chain(&ds.tree, &ds.field, la.chain, Isovalue::new(h))
+                && !positions.iter().any(|p| p.0 == seed.arc)
             {
                 positions.push((seed.arc, h));
             }

@@ -25,6 +25,8 @@ pub enum SceneKey {
     Contour(ContourId),
     /// Component `i` of "all contours at h".
     AtH(usize),
+    /// The hover preview of an arc's contour (drawn dimmed, never picked).
+    Preview,
 }
 
 /// One mesh the view should draw.
@@ -80,6 +82,10 @@ pub struct View3d {
     pub renders: u64,
     /// The last double-click fitted the contours (the next fits the box).
     fitted_to_contours: bool,
+    /// A box to frame once the view's shape is known (next frame).
+    pending_fit: Option<([f32; 3], [f32; 3])>,
+    /// Meshes still being copied to the GPU after the last frame.
+    pub uploading: bool,
     /// Context and annotations (see [`ViewContext`]).
     pub context: ViewContext,
     /// The slice versions the renderer holds.
@@ -142,6 +148,8 @@ impl View3d {
             last_render_ms: 0.0,
             renders: 0,
             fitted_to_contours: false,
+            pending_fit: None,
+            uploading: false,
             context: ViewContext::default(),
             slices_set: [0; 3],
             rect: None,
@@ -266,10 +274,20 @@ impl View3d {
         }
     }
 
+    /// Frames the box `[min, max]` (contours' bounds) at the next frame,
+    /// when the view's width and height are known: the whole box shows
+    /// however narrow the view is.
+    pub fn fit_to(&mut self, min: [f32; 3], max: [f32; 3]) {
+        self.camera.fit(min, max);
+        self.pending_fit = Some((min, max));
+        self.fitted_to_contours = true;
+    }
+
     /// Sets the volume's box (drawn faint) and fits the camera to it.
     pub fn set_bounds(&mut self, min: [f32; 3], max: [f32; 3]) {
         self.bounds = Some((min, max));
         self.camera.fit(min, max);
+        self.pending_fit = Some((min, max));
         if let Some(r) = &mut self.renderer {
             r.set_bounds(min, max);
         }
@@ -372,8 +390,17 @@ impl View3d {
         let Some(renderer) = &mut self.renderer else {
             return events;
         };
-        if renderer.upload_pending(&rs.device, &rs.queue, UPLOAD_BUDGET) {
+        self.uploading = renderer.upload_pending(&rs.device, &rs.queue, UPLOAD_BUDGET);
+        if self.uploading {
             ui.ctx().request_repaint();
+        }
+        if let Some((lo, hi)) = self.pending_fit.take() {
+            fit_in_view(
+                &mut self.camera,
+                lo,
+                hi,
+                rect.width() / rect.height().max(1.0),
+            );
         }
 
         // Camera.
@@ -394,8 +421,10 @@ impl View3d {
             }
         }
         if response.double_clicked() {
-            // Fit the contours shown; a second double-click fits the volume.
-            let contours = renderer.visible_bounds();
+            // Fit the contours shown, at their current geometry (the
+            // scene's meshes, not what was last uploaded); a second
+            // double-click fits the volume.
+            let contours = scene_bounds(scene);
             let target = match (contours, self.fitted_to_contours) {
                 (Some(b), false) => {
                     self.fitted_to_contours = true;
@@ -407,7 +436,12 @@ impl View3d {
                 }
             };
             if let Some((lo, hi)) = target {
-                self.camera.fit(lo, hi);
+                fit_in_view(
+                    &mut self.camera,
+                    lo,
+                    hi,
+                    rect.width() / rect.height().max(1.0),
+                );
             }
         } else if response.clicked()
             && let Some(p) = response.interact_pointer_pos()
@@ -418,6 +452,7 @@ impl View3d {
                     events.picked = self
                         .keys
                         .get(&id)
+                        .filter(|k| **k != SceneKey::Preview)
                         .map(|&k| (k, ui.input(|i| i.modifiers.shift)));
                 }
                 None => events.clicked_empty = true,
@@ -472,5 +507,32 @@ impl View3d {
             .as_ref()
             .ok_or_else(|| anyhow::anyhow!("the 3D view has not been drawn yet"))?;
         Ok(r.read_image(&rs.device, &rs.queue)?)
+    }
+}
+
+/// The bounds of the visible meshes of `scene` (the hover preview left
+/// out), None when nothing is drawn.
+pub fn scene_bounds(scene: &[SceneMesh]) -> Option<([f32; 3], [f32; 3])> {
+    let mut lo = glam::Vec3::splat(f32::INFINITY);
+    let mut hi = glam::Vec3::splat(f32::NEG_INFINITY);
+    for m in scene
+        .iter()
+        .filter(|m| m.visible && m.key != SceneKey::Preview)
+    {
+        lo = lo.min(m.mesh.bbox.0);
+        hi = hi.max(m.mesh.bbox.1);
+    }
+    lo.cmple(hi).all().then(|| (lo.to_array(), hi.to_array()))
+}
+
+/// Fits `camera` to the box for a view of `aspect` = width / height:
+/// [`Camera::fit`] frames the box's sphere in the vertical field of view;
+/// a view narrower than tall needs the eye farther back for the sphere to
+/// fit the horizontal one too (else the box is cut at the sides).
+pub fn fit_in_view(camera: &mut Camera, lo: [f32; 3], hi: [f32; 3], aspect: f32) {
+    camera.fit(lo, hi);
+    if aspect.is_finite() && aspect > 0.0 && aspect < 1.0 {
+        let half_x = (aspect * (0.5 * camera.fov_y).tan()).atan();
+        camera.distance = 1.05 * camera.scene_radius / half_x.sin();
     }
 }
