@@ -591,8 +591,9 @@ fn crossed_edges<T: Scalar>(
     let spacing = field.spacing();
     let mut i = 0;
     let mut edge = 0;
-    for y in 0..ny {
-        if !active[y] {
+    // `active` holds the plane's `ny` rows.
+    for (y, &on) in active.iter().enumerate() {
+        if !on {
             continue;
         }
         for x in 0..nx {
