@@ -210,22 +210,31 @@ pub(crate) fn downhill<T: Scalar>(
     s: f64,
 ) -> Option<[f32; 3]> {
     let stride = [1, dims[0], dims[0] * dims[1]];
+    // Differences per index step (the spacing is applied once, after the
+    // interpolation, and the length by one reciprocal: divisions cost
+    // more than the rest of a vertex's arithmetic).
     let gradient = |(v, c): (usize, [usize; 3])| -> [f64; 3] {
         std::array::from_fn(|k| {
-            let lo = if c[k] > 0 { v - stride[k] } else { v };
-            let hi = if c[k] + 1 < dims[k] { v + stride[k] } else { v };
-            let steps = (hi - lo) / stride[k];
-            if steps == 0 {
-                0.0
+            if c[k] > 0 && c[k] + 1 < dims[k] {
+                0.5 * (values[v + stride[k]].to_f64() - values[v - stride[k]].to_f64())
+            } else if c[k] > 0 {
+                values[v].to_f64() - values[v - stride[k]].to_f64()
+            } else if c[k] + 1 < dims[k] {
+                values[v + stride[k]].to_f64() - values[v].to_f64()
             } else {
-                (values[hi].to_f64() - values[lo].to_f64()) / (steps as f64 * spacing[k])
+                0.0
             }
         })
     };
     let (gb, ga) = (gradient(below), gradient(above));
-    let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])));
-    let l = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-    (l > 0.0 && l.is_finite()).then(|| g.map(|x| (x / l) as f32))
+    // Loop-invariant where this is inlined into a loop over vertices.
+    let inverse = spacing.map(f64::recip);
+    let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])) * inverse[k]);
+    let l2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    (l2 > 0.0 && l2.is_finite()).then(|| {
+        let r = l2.sqrt().recip();
+        g.map(|x| (x * r) as f32)
+    })
 }
 
 /// Takes the downhill gradient `g` for the unit normal `n` (area-weighted,

@@ -14,7 +14,10 @@
 //!    ends lie on either side of the cut. One byte per vertex, the corners
 //!    of its cube above the cut, says which; counting them per row numbers
 //!    every contour vertex (in order of lower end, then offset) without a
-//!    list of edges.
+//!    list of edges. A row of cubes whose four vertex rows lie wholly on
+//!    one side of the cut (known from one sum over each vertex row's
+//!    side bytes) has masks 0 or 0xff, written by a fill, and every later
+//!    pass skips it (the rows of air around a scanned head, for one).
 //! 2. **Triangles, slab by slab.** A cube layer reads the vertex ids of the
 //!    edges owned by its two planes from a dense table per plane, refilled
 //!    from the cube bytes (never cleared: only crossed edges are read). The
@@ -123,6 +126,10 @@ struct Sweep<'a> {
     /// Per volume vertex: the corners of its cube above the cut (bit `m`
     /// for corner offset `m`; corners beyond the box copy the vertex).
     cubes: &'a [u8],
+    /// `active[y + ny * z]`: false when every cube of the row has all its
+    /// corners on one side of the cut (its mask is 0 or 0xff: no crossed
+    /// edge, no triangle), so every pass over cubes skips the row.
+    active: &'a [bool],
     /// `row_base[y + ny * z]`: id of the first contour vertex owned by the
     /// row; one more entry, the number of contour vertices.
     row_base: &'a [u32],
@@ -183,24 +190,21 @@ fn sweep<T: Scalar>(
     iso: Isovalue,
 ) -> Option<Vec<ContourMesh>> {
     let [nx, ny, nz] = field.dims();
-    let plane = nx * ny;
-    let above: Vec<u8> = values
-        .par_iter()
-        .enumerate()
-        .map(|(v, f)| iso.above_value(f.to_f64(), v as u32) as u8)
-        .collect();
-    let mut cubes = vec![0u8; values.len()];
-    cubes
-        .par_chunks_mut(plane)
-        .enumerate()
-        .for_each(|(z, c)| cube_masks(&above, field.dims(), z, c));
+    let mut above = Vec::new();
+    let mut cubes = Vec::new();
+    let mut active = Vec::new();
+    sides_and_cubes(
+        values,
+        field.dims(),
+        iso,
+        &mut above,
+        &mut cubes,
+        &mut active,
+    );
     drop(above);
 
     // 1. Contour vertices, counted per row, then filled plane by plane.
-    let row_counts: Vec<usize> = cubes
-        .par_chunks(nx)
-        .map(|row| row.iter().map(|&m| crossed(m).count_ones() as usize).sum())
-        .collect();
+    let row_counts = count_rows(&cubes, &active, nx);
     // Triangle ids and vertex ids both fit in u32 (and root/label arrays
     // stay addressable); beyond that the follower takes over.
     let row_base = prefix_sums(row_counts.into_iter(), u32::MAX as usize / 4)?;
@@ -224,30 +228,18 @@ fn sweep<T: Scalar>(
         .enumerate()
         .for_each(|(z, (((p, g), f), n))| {
             n.fill([0.0; 3]);
-            crossed_edges(values, field, &cubes, iso, z, |_| true, p, g, f)
+            let rows = &active[ny * z..][..ny];
+            crossed_edges(values, field, &cubes, rows, iso, z, |_| true, p, g, f)
         });
 
     // 2. Triangles, counted per cube layer, then written slab by slab.
-    let tables = SweepTables::get();
-    let layer_triangles: Vec<usize> = (0..nz - 1)
-        .into_par_iter()
-        .map(|z| {
-            let mut t = 0usize;
-            for y in 0..ny - 1 {
-                let row = &cubes[nx * (y + ny * z)..][..nx - 1];
-                t += row
-                    .iter()
-                    .map(|&c| tables.triangles[c as usize] as usize)
-                    .sum::<usize>();
-            }
-            t
-        })
-        .collect();
+    let layer_triangles = count_layer_triangles(&cubes, &active, field.dims());
     let layer_start = prefix_sums(layer_triangles.iter().map(|t| 3 * t), u32::MAX as usize)?;
     let mut indices = vec![0u32; layer_start[nz - 1] as usize];
     let ctx = Sweep {
         dims: field.dims(),
         cubes: &cubes,
+        active: &active,
         row_base: &row_base,
     };
     let layers = nz - 1;
@@ -418,12 +410,127 @@ fn edge_id(field: &ScalarField, ctx: &Sweep, lo: u32, hi: u32) -> Option<u32> {
     Some(ctx.row_base[y + ny * z] + before + below_d)
 }
 
-/// The cube masks of the vertices of plane `z` (see [`Sweep::cubes`]).
-fn cube_masks(above: &[u8], dims: [usize; 3], z: usize, out: &mut [u8]) {
+/// A vertex row whose vertices all lie below the cut.
+const ALL_BELOW: u8 = 0;
+/// A vertex row whose vertices all lie above the cut.
+const ALL_ABOVE: u8 = 1;
+/// A vertex row with vertices on both sides.
+const MIXED: u8 = 2;
+
+/// Which side of `iso` every vertex lies on (`above`, one byte each), the
+/// side of every vertex row (`ALL_BELOW`, `ALL_ABOVE` or `MIXED`), the
+/// cube masks (`cubes`, see [`Sweep::cubes`]) and which cube rows have a
+/// crossed edge at all (`active`, see [`Sweep::active`]). The buffers are
+/// resized to the field, never shrunk.
+///
+/// A cube row reads the vertex rows `{y, y + 1} × {z, z + 1}` (clamped to
+/// the box, as the masks' corners are). When those four rows lie wholly on
+/// one side, every mask of the row is 0 or 0xff, written without looking
+/// at the corners: most of a scan's rows (air, the inside of the skull at
+/// the scalp's isovalue) cost one pass of sums over `above` and a fill.
+fn sides_and_cubes<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    iso: Isovalue,
+    above: &mut Vec<u8>,
+    cubes: &mut Vec<u8>,
+    active: &mut Vec<bool>,
+) {
+    let [nx, ny, _] = dims;
+    let plane = nx * ny;
+    let rows = values.len() / nx;
+    above.resize(values.len(), 0);
+    let mut sides = vec![0u8; rows];
+    above
+        .par_chunks_mut(plane)
+        .zip(values.par_chunks(plane))
+        .zip(sides.par_chunks_mut(ny))
+        .enumerate()
+        .for_each(|(z, ((a, f), sides))| {
+            for (y, side) in sides.iter_mut().enumerate() {
+                let first = (plane * z + nx * y) as u32;
+                let (a, f) = (&mut a[nx * y..][..nx], &f[nx * y..][..nx]);
+                for (k, (a, f)) in a.iter_mut().zip(f).enumerate() {
+                    *a = iso.above_value(f.to_f64(), first + k as u32) as u8;
+                }
+                let up: usize = a.iter().map(|&b| b as usize).sum();
+                *side = match up {
+                    0 => ALL_BELOW,
+                    u if u == nx => ALL_ABOVE,
+                    _ => MIXED,
+                };
+            }
+        });
+    cubes.resize(values.len(), 0);
+    active.resize(rows, false);
+    cubes
+        .par_chunks_mut(plane)
+        .zip(active.par_chunks_mut(ny))
+        .enumerate()
+        .for_each(|(z, (c, a))| cube_masks(above, &sides, dims, z, c, a));
+}
+
+/// Crossed edges per row of vertices (see [`crossed`]); inactive rows have
+/// none.
+fn count_rows(cubes: &[u8], active: &[bool], nx: usize) -> Vec<usize> {
+    cubes
+        .par_chunks(nx)
+        .zip(active.par_iter())
+        .map(|(row, &a)| {
+            if a {
+                row.iter().map(|&m| crossed(m).count_ones() as usize).sum()
+            } else {
+                0
+            }
+        })
+        .collect()
+}
+
+/// Triangles per cube layer.
+fn count_layer_triangles(cubes: &[u8], active: &[bool], dims: [usize; 3]) -> Vec<usize> {
+    let [nx, ny, nz] = dims;
+    let tables = SweepTables::get();
+    (0..nz - 1)
+        .into_par_iter()
+        .map(|z| {
+            (0..ny - 1)
+                .filter(|&y| active[y + ny * z])
+                .map(|y| {
+                    cubes[nx * (y + ny * z)..][..nx - 1]
+                        .iter()
+                        .map(|&c| tables.triangles[c as usize] as usize)
+                        .sum::<usize>()
+                })
+                .sum()
+        })
+        .collect()
+}
+
+/// The cube masks of the vertices of plane `z` (see [`Sweep::cubes`]),
+/// and which of its rows are active (see [`sides_and_cubes`]).
+fn cube_masks(
+    above: &[u8],
+    sides: &[u8],
+    dims: [usize; 3],
+    z: usize,
+    out: &mut [u8],
+    active: &mut [bool],
+) {
     let [nx, ny, nz] = dims;
     let plane = nx * ny;
     for y in 0..ny {
         let row = nx * (y + ny * z);
+        let (y1, z1) = ((y + 1).min(ny - 1), (z + 1).min(nz - 1));
+        let side = sides[y + ny * z];
+        let uniform = side != MIXED
+            && [y1 + ny * z, y + ny * z1, y1 + ny * z1]
+                .iter()
+                .all(|&r| sides[r] == side);
+        active[y] = !uniform;
+        if uniform {
+            out[nx * y..][..nx].fill(if side == ALL_ABOVE { 0xff } else { 0 });
+            continue;
+        }
         // Inside the box (every corner exists): eight loads, no branch.
         let inner = if y + 1 < ny && z + 1 < nz { nx - 1 } else { 0 };
         if inner > 0 {
@@ -471,6 +578,7 @@ fn crossed_edges<T: Scalar>(
     values: &[T],
     field: &ScalarField,
     cubes: &[u8],
+    active: &[bool],
     iso: Isovalue,
     z: usize,
     mut keep: impl FnMut(usize) -> bool,
@@ -483,7 +591,11 @@ fn crossed_edges<T: Scalar>(
     let spacing = field.spacing();
     let mut i = 0;
     let mut edge = 0;
-    for y in 0..ny {
+    // `active` holds the plane's `ny` rows.
+    for (y, &on) in active.iter().enumerate() {
+        if !on {
+            continue;
+        }
         for x in 0..nx {
             let v = x + nx * (y + ny * z);
             let cube = cubes[v];
@@ -552,6 +664,9 @@ impl Sweep<'_> {
             std::mem::swap(&mut lower, &mut upper);
             self.fill_ids(&mut upper, z + 1);
             for y in 0..ny - 1 {
+                if !self.active[y + ny * z] {
+                    continue;
+                }
                 for x in 0..nx - 1 {
                     let cube = self.cubes[x + nx * (y + ny * z)] as usize;
                     if cube == 0 || cube == 0xff {
@@ -582,14 +697,22 @@ impl Sweep<'_> {
     fn fill_ids(&self, ids: &mut [u32], z: usize) {
         let [nx, ny, _] = self.dims;
         let plane = nx * ny;
-        let mut id = self.row_base[z * ny];
-        for (i, &cube) in self.cubes[plane * z..][..plane].iter().enumerate() {
-            let mut todo = crossed(cube);
-            while todo != 0 {
-                let d = todo.trailing_zeros() as usize;
-                todo &= todo - 1;
-                ids[i * 8 + d] = id;
-                id += 1;
+        for y in 0..ny {
+            let r = y + ny * z;
+            let mut id = self.row_base[r];
+            if id == self.row_base[r + 1] {
+                continue;
+            }
+            let row = &self.cubes[plane * z + nx * y..][..nx];
+            for (x, &cube) in row.iter().enumerate() {
+                let i = x + nx * y;
+                let mut todo = crossed(cube);
+                while todo != 0 {
+                    let d = todo.trailing_zeros() as usize;
+                    todo &= todo - 1;
+                    ids[i * 8 + d] = id;
+                    id += 1;
+                }
             }
         }
     }
@@ -661,6 +784,7 @@ fn find(parent: &mut [u32], first: u32, mut x: u32) -> u32 {
 pub(crate) struct SweepScratch {
     above: Vec<u8>,
     cubes: Vec<u8>,
+    active: Vec<bool>,
     parent: Vec<u32>,
 }
 
@@ -702,35 +826,18 @@ fn sweep_one<T: Scalar>(
     let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
     let dims = field.dims();
     let [nx, ny, nz] = dims;
-    let plane = nx * ny;
     let SweepScratch {
         above,
         cubes,
+        active,
         parent,
     } = scratch;
-    above.resize(values.len(), 0);
-    above
-        .par_chunks_mut(1 << 16)
-        .zip(values.par_chunks(1 << 16))
-        .enumerate()
-        .for_each(|(c, (a, f))| {
-            let first = (c << 16) as u32;
-            for (k, (a, f)) in a.iter_mut().zip(f).enumerate() {
-                *a = iso.above_value(f.to_f64(), first + k as u32) as u8;
-            }
-        });
-    cubes.resize(values.len(), 0);
-    cubes
-        .par_chunks_mut(plane)
-        .enumerate()
-        .for_each(|(z, c)| cube_masks(above, dims, z, c));
+    sides_and_cubes(values, dims, iso, above, cubes, active);
+    let active: &[bool] = active;
     check()?;
 
     // 1. Crossed edges numbered by rows (see the module doc).
-    let row_counts: Vec<usize> = cubes
-        .par_chunks(nx)
-        .map(|row| row.iter().map(|&m| crossed(m).count_ones() as usize).sum())
-        .collect();
+    let row_counts = count_rows(cubes, active, nx);
     let Some(row_base) = prefix_sums(row_counts.into_iter(), u32::MAX as usize / 4) else {
         return Ok(None);
     };
@@ -738,6 +845,7 @@ fn sweep_one<T: Scalar>(
     let ctx = Sweep {
         dims,
         cubes,
+        active,
         row_base: &row_base,
     };
     let Some(seed_id) = edge_id(
@@ -755,20 +863,7 @@ fn sweep_one<T: Scalar>(
 
     // 2. Every triangle at `iso`, slab by slab, with 3. the unions inside
     // each slab.
-    let tables = SweepTables::get();
-    let layer_triangles: Vec<usize> = (0..nz - 1)
-        .into_par_iter()
-        .map(|z| {
-            (0..ny - 1)
-                .map(|y| {
-                    cubes[nx * (y + ny * z)..][..nx - 1]
-                        .iter()
-                        .map(|&c| tables.triangles[c as usize] as usize)
-                        .sum::<usize>()
-                })
-                .sum()
-        })
-        .collect();
+    let layer_triangles = count_layer_triangles(cubes, active, dims);
     let Some(layer_start) = prefix_sums(layer_triangles.iter().map(|t| 3 * t), u32::MAX as usize)
     else {
         return Ok(None);
@@ -868,7 +963,9 @@ fn sweep_one<T: Scalar>(
                     DROPPED
                 };
             }
-            crossed_edges(values, field, cubes, iso, z, |i| map[i] != DROPPED, p, g, f);
+            let rows = &active[ny * z..][..ny];
+            let keep = |i: usize| map[i] != DROPPED;
+            crossed_edges(values, field, cubes, rows, iso, z, keep, p, g, f);
         });
     let map: &[u32] = parent;
     check()?;

@@ -226,7 +226,11 @@ pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
         let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
         (x, y) = ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y));
     }
-    [x, y].map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16)
+    // Round half away from zero without a libm call (the cast truncates).
+    [x, y].map(|v| {
+        let v = v.clamp(-1.0, 1.0) * 32767.0;
+        (v + 0.5f32.copysign(v)) as i16
+    })
 }
 
 /// The unit vector of an octahedral [`GpuVertex::normal`] (what the vertex
@@ -337,13 +341,11 @@ impl PreparedMesh {
         let quantise = |(p, nr): (&[f32; 3], &[f32; 3])| {
             let q = ((Vec3::from(*p) - origin) * step).clamp(Vec3::ZERO, Vec3::splat(Q));
             let q = if q.is_finite() { q } else { Vec3::ZERO };
+            // Rounding of a non-negative value without a libm call (the
+            // cast truncates): a third of the pass otherwise.
+            let q = q + Vec3::splat(0.5);
             GpuVertex {
-                position: [
-                    q.x.round() as u16,
-                    q.y.round() as u16,
-                    q.z.round() as u16,
-                    0,
-                ],
+                position: [q.x as u16, q.y as u16, q.z as u16, 0],
                 normal: encode_normal(*nr),
             }
         };

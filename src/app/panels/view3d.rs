@@ -45,12 +45,19 @@ pub struct SceneMesh {
     pub highlighted: bool,
 }
 
-/// Bytes of mesh data copied to the GPU per frame at most (one mesh of
-/// ~300k triangles goes in whole). Bigger scenes, like every contour of
-/// a brain at one isovalue, arrive over several frames instead of
-/// holding one frame for 100 ms: copying into fresh buffers costs a page
-/// fault per 4 KiB besides the copy.
-pub const UPLOAD_BUDGET: u64 = 8 << 20;
+/// Bytes of mesh data copied to the GPU per frame at most: 32 MiB, so
+/// the 5.36 M-triangle head of colin27 (64 MB as 12-byte vertices and
+/// 16-bit index runs) arrives in two frames of copying (the bench counts
+/// three calls, the last one finding nothing left) instead of nine. The
+/// slowest frame's copy, median / worst over a scripted drag of the head
+/// on lavapipe, measured 269 / 391 ms at 32 MiB against 141 / 332 ms at
+/// 8 MiB in one run on the 2-core machine under load 16 (`cargo bench
+/// --bench contour`): per byte four times cheaper, per frame dearer; to be
+/// re-measured quiet. Bigger scenes, like every contour of a brain at one
+/// isovalue, arrive over more frames instead of holding one frame long:
+/// copying into fresh buffers costs a page fault per 4 KiB besides the
+/// copy.
+pub const UPLOAD_BUDGET: u64 = 32 << 20;
 
 /// What happened in the view this frame.
 #[derive(Clone, Copy, Debug, Default)]
