@@ -140,7 +140,8 @@ fn a_slice_shows_each_contours_cross_section_in_its_colour() {
     let gpu = common::gpu().is_some();
     let mut h = explorer(gpu);
     both_spheres_from_plus_x(&mut h);
-    click(&mut h, view_centre(&h));
+    let centre = view_centre(&h);
+    click(&mut h, centre);
     if !gpu {
         // Without a renderer no click picks: select a bump as the list would.
         let app = h.state();
