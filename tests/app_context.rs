@@ -140,7 +140,8 @@ fn a_slice_shows_each_contours_cross_section_in_its_colour() {
     let gpu = common::gpu().is_some();
     let mut h = explorer(gpu);
     both_spheres_from_plus_x(&mut h);
-    click(&mut h, view_centre(&h));
+    let centre = view_centre(&h);
+    click(&mut h, centre);
     if !gpu {
         // Without a renderer no click picks: select a bump as the list would.
         let app = h.state();
@@ -340,11 +341,25 @@ fn render_session_draws_the_legend_the_slices_and_the_clip() {
 
     // A slice across z, the contours clipped away: grey values fill the
     // picture where the contours were.
+    // Through the middle of the red contour.
+    let z = {
+        let m = h.state().selection().contours[0]
+            .mesh
+            .clone()
+            .expect("extracted");
+        let (lo, hi) = m
+            .positions
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
+                (lo.min(p[2]), hi.max(p[2]))
+            });
+        (0.5 * (lo + hi)).round() as usize
+    };
     let mut s = Session::read(&path).expect("a session");
     s.slices = Some(flexiso::session::SessionSlices::from_array([
         None,
         None,
-        Some(12),
+        Some(z),
     ]));
     s.clip = Some(flexiso::session::SessionClip {
         axis: "z".into(),

@@ -14,8 +14,8 @@ use super::panels::menu::ViewOptions;
 use super::panels::slices::{SectionSource, SlicePanel, rgb};
 use super::panels::view3d::{Label, ViewContext};
 use super::selection::Contour;
-use crate::render::ViewPreset;
 use crate::render::overlay::LegendEntry;
+use crate::render::{ClipPlane, ViewPreset};
 
 /// What a contour is called in the legend and its label: its name, or
 /// "contour N" without one.
@@ -27,13 +27,26 @@ pub fn display_name(c: &Contour) -> String {
     }
 }
 
-/// The highest point of a mesh (where its label goes): on top of the
-/// surface, seen from the usual views.
-fn top_point(positions: &[[f32; 3]]) -> Option<[f32; 3]> {
+/// The highest point of a mesh that the clipping plane keeps (where its
+/// label goes): on top of the surface, seen from the usual views.
+fn top_point(positions: &[[f32; 3]], clip: Option<ClipPlane>) -> Option<[f32; 3]> {
     positions
         .iter()
         .copied()
+        .filter(|p| clip.is_none_or(|c| c.keeps(*p)))
         .max_by(|a, b| a[2].total_cmp(&b[2]).then(a[1].total_cmp(&b[1])))
+}
+
+/// Names a clipping plane in a cache key.
+fn clip_key(clip: Option<ClipPlane>) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::hash::DefaultHasher::new();
+    if let Some(c) = clip {
+        for x in c.normal.iter().chain([&c.offset]) {
+            x.to_bits().hash(&mut h);
+        }
+    }
+    h.finish()
 }
 
 impl FlexisoApp {
@@ -64,17 +77,18 @@ impl FlexisoApp {
             .collect();
         self.slices.update(&sources);
         let view = self.menu.view;
+        let clip = self.slices.clip_plane();
         let labels = if view.labels {
             shown
                 .iter()
                 .filter_map(|c| {
-                    let key = (c.id.0, c.version);
+                    let key = (c.id.0, c.version, clip_key(clip));
                     let anchor = match self.slices.label_anchors.get(&key) {
-                        Some(a) => *a,
+                        Some(a) => (*a)?,
                         None => {
-                            let a = top_point(&c.mesh.as_ref()?.positions)?;
+                            let a = top_point(&c.mesh.as_ref()?.positions, clip);
                             self.slices.label_anchors.insert(key, a);
-                            a
+                            a?
                         }
                     };
                     Some(Label {
@@ -89,11 +103,13 @@ impl FlexisoApp {
         };
         if self.slices.label_anchors.len() > 4 * shown.len() + 16 {
             let live: Vec<(u64, u64)> = shown.iter().map(|c| (c.id.0, c.version)).collect();
-            self.slices.label_anchors.retain(|k, _| live.contains(k));
+            self.slices
+                .label_anchors
+                .retain(|k, _| live.contains(&(k.0, k.1)));
         }
         self.view3d.context = ViewContext {
             slices: self.slices.quads(),
-            clip: self.slices.clip_plane(),
+            clip,
             labels,
             legend: if view.legend {
                 self.legend_entries()

@@ -102,8 +102,9 @@ pub struct SlicePanel {
     next_version: u64,
     /// Milliseconds the last rebuild of the images took.
     pub build_ms: f64,
-    /// Where each contour's label goes, by (contour, mesh version).
-    pub(crate) label_anchors: HashMap<(u64, u64), [f32; 3]>,
+    /// Where each contour's label goes (none: all of it is cut away), by
+    /// (contour, mesh version, clipping plane).
+    pub(crate) label_anchors: HashMap<(u64, u64, u64), Option<[f32; 3]>>,
 }
 
 impl Default for SlicePanel {
