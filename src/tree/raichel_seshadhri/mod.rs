@@ -36,12 +36,9 @@
 //!    neighbour they climb to (the lowest upper neighbour reachable along
 //!    link edges, whose order step 1 already knows), so each starts from its
 //!    upper neighbour's arc: one comparison when v lies on it, else a
-//!    search along the rest of the path in the tree rooted at the global
-//!    minimum: a walk of up to [`LOCATE_WALK`] nodes from where each part
-//!    of the path starts (the answer is usually there), then Myers' jump
-//!    pointers (O(log depth) comparisons; a plain walk cost thousands per
-//!    vertex at the foot of tooth's noisy trunk, and jump pointers alone,
-//!    climbing from m' at the bottom, 12 per vertex on tooth). Every
+//!    search along the rest of the path by Myers' jump pointers in the tree
+//!    rooted at the global minimum (O(log depth) comparisons; a plain walk
+//!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
 //!    comparison is with a supernode on v's own monotone path (an ancestor
 //!    or descendant in the augmented tree). The way down at a node towards
 //!    m' is chosen by Euler-tour intervals, without comparisons. Both the
@@ -643,10 +640,6 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
     next
 }
 
-/// Nodes [`SuperarcWalk::locate`] walks down from the common ancestor
-/// before it climbs by jump pointers.
-const LOCATE_WALK: usize = 8;
-
 /// The superarc tree rooted at the global minimum, with Euler-tour
 /// intervals, to choose at a node the down arc that leads towards a given
 /// minimum without comparing values.
@@ -667,9 +660,6 @@ struct SuperarcWalk {
     jump: Vec<u32>,
     tin: Vec<u32>,
     tout: Vec<u32>,
-    /// Children in the rooted tree, per node.
-    child_off: Vec<u32>,
-    child: Vec<u32>,
 }
 
 impl SuperarcWalk {
@@ -756,23 +746,6 @@ impl SuperarcWalk {
                 }
             }
         }
-        let mut child_off = vec![0u32; k + 1];
-        for &p in &parent {
-            if p != NONE {
-                child_off[p as usize + 1] += 1;
-            }
-        }
-        for i in 1..=k {
-            child_off[i] += child_off[i - 1];
-        }
-        let mut fill = child_off.clone();
-        let mut child = vec![0u32; k.saturating_sub(1)];
-        for (w, &p) in parent.iter().enumerate() {
-            if p != NONE {
-                child[fill[p as usize] as usize] = w as u32;
-                fill[p as usize] += 1;
-            }
-        }
         Self {
             down_off,
             down,
@@ -783,8 +756,6 @@ impl SuperarcWalk {
             jump,
             tin,
             tout,
-            child_off,
-            child,
         }
     }
 
@@ -819,10 +790,11 @@ impl SuperarcWalk {
     /// The arc at a height on the monotone path from node `s` down to the
     /// minimum `m`: `above(x)` says whether node x is above that height
     /// (true at `s`, false at `m`). The path climbs from `s` to the common
-    /// ancestor c and descends to `m`; along each part `above` changes once.
-    /// A short walk from the part's start finds the change in a comparison
-    /// or two when it is near (the usual case); past it, jump pointers find
-    /// it in O(log depth) comparisons.
+    /// ancestor c and descends to `m`; along each part `above` changes once,
+    /// and jump pointers find the change in O(log depth) comparisons. (A
+    /// walk of a few nodes from each part's start before the jumps was
+    /// tried: on tooth the change is rarely near, and it raised locating
+    /// from 12.6 to 14.2 comparisons per vertex.)
     fn locate(&self, s: u32, m: u32, mut above: impl FnMut(u32) -> bool) -> u32 {
         let c = if self.in_subtree(m, s) {
             s
@@ -831,16 +803,8 @@ impl SuperarcWalk {
         };
         let dc = self.depth[c as usize];
         if c != s && !above(c) {
-            // On s's side: the last ancestor of s above the height; a few
-            // parents first (it is usually near s), then jump pointers.
+            // On s's side: the last ancestor of s above the height.
             let mut x = s;
-            for _ in 0..LOCATE_WALK {
-                let p = self.parent[x as usize];
-                if p == c || !above(p) {
-                    return self.parent_arc[x as usize];
-                }
-                x = p;
-            }
             loop {
                 let j = self.jump[x as usize];
                 if self.depth[j as usize] > dc && above(j) {
@@ -855,23 +819,7 @@ impl SuperarcWalk {
                 return self.parent_arc[x as usize];
             }
         }
-        // On m's side: the last ancestor of m below the height. It is
-        // usually a node or two below c (the height is met near where the
-        // search starts), while the jump pointers climb from m, at the
-        // bottom: walk down from c first, one comparison per node (the child
-        // towards m by Euler-tour intervals), and climb from m only past
-        // that (on tooth and the MRI volumes the climb from m made locating
-        // cost 12 comparisons per vertex).
-        let mut x = c;
-        for _ in 0..LOCATE_WALK {
-            let Some(q) = self.child_towards(x, m) else {
-                break;
-            };
-            if !above(q) {
-                return self.parent_arc[q as usize];
-            }
-            x = q;
-        }
+        // On m's side: the last ancestor of m below the height.
         let mut x = m;
         loop {
             let j = self.jump[x as usize];
@@ -886,18 +834,6 @@ impl SuperarcWalk {
             }
             return self.parent_arc[x as usize];
         }
-    }
-
-    /// The child of `x` in the rooted tree whose subtree holds `m`, if `m`
-    /// lies strictly below `x`.
-    #[inline]
-    fn child_towards(&self, x: u32, m: u32) -> Option<u32> {
-        if x == m || !self.in_subtree(m, x) {
-            return None;
-        }
-        let kids = &self.child
-            [self.child_off[x as usize] as usize..self.child_off[x as usize + 1] as usize];
-        kids.iter().copied().find(|&q| self.in_subtree(m, q))
     }
 
     #[inline]
