@@ -4,36 +4,83 @@
 //!
 //! **Drawing.** Every branch gets a column; its nodes sit in it, so the
 //! arcs along a branch are vertical. The first arc of a branch, from the
-//! saddle it hangs from, is drawn as in the papers' figures: a horizontal
-//! connector at the saddle's height from the parent's column to the
-//! branch's, then vertically to the branch's first node.
+//! saddle it hangs from, is drawn as in the papers' figures: vertically
+//! in the branch's column down (up) to its *bend*, then to the saddle in
+//! the parent's column. The bend is the saddle's value (a horizontal
+//! connector) except at shared saddles, below.
 //!
 //! **Order without crossings.** Take a branch `p` and its children on one
 //! side, nearest first. A child's connector at its saddle height `s_k`
 //! passes the columns of every nearer sibling `i` and of `i`'s whole
-//! subtree, whose drawing spans the values `range(i)`; it crosses nothing
-//! iff `s_k ∉ range(i)` for every nearer `i`. Call a child *up-reaching*
-//! when its subtree lies at or above its saddle, *down-reaching* when at
-//! or below. Among up-reaching children sorted by saddle value, highest
-//! nearest, a farther child's saddle is below every nearer saddle and so
-//! below every nearer range: no crossing. Symmetrically down-reaching
-//! children go on the other side, lowest saddle nearest. A child reaching
-//! both ways joins the side where fewer farther siblings have their saddle
-//! inside its range (counted by binary search); only such children can
-//! cause crossings, and [`LevelLayout::crossings`] counts them. The side
-//! facing a branch's own parent takes the children reaching the way the
-//! branch goes (up for a maximum's branch), so the parent's connector,
-//! at the branch's saddle, passes only subtrees on the far side of it.
-//! Children of one saddle on one side would share a connector: all but
-//! the nearest are drawn as straight segments instead.
+//! subtree, whose drawing is connected and spans the values `range(i)`;
+//! it crosses nothing iff `s_k ∉ range(i)` for every nearer `i`. Call a
+//! child *up-reaching* when its subtree (its nodes and its descendants',
+//! not the saddle) lies strictly above its saddle, *down-reaching* when
+//! strictly below. Among up-reaching children sorted by saddle value,
+//! highest nearest, a farther child's saddle is below every nearer
+//! saddle and so below every nearer range: no crossing. Symmetrically
+//! down-reaching children go on the other side, lowest saddle nearest. A
+//! child reaching both ways goes where it is passed by the fewest
+//! connectors (counted by binary search): among a side's children in
+//! saddle order, or beyond them all; only such children can cause
+//! crossings, and [`LevelLayout::crossings`] counts them. The side facing
+//! a branch's own parent takes the children reaching the way the branch
+//! goes (up for a maximum's branch): their ranges lie beyond their
+//! saddles, so beyond the branch's own saddle, and the parent's
+//! connector, at that saddle, passes none of them (a child reaching both
+//! ways pays one more there when its range holds that saddle).
+//!
+//! **Shared saddles** (three or more arcs at one node: multi-saddles and
+//! collapsed plateaus). Children `g_1 .. g_m` (nearest first) of one
+//! saddle `P` at value `s` on the up-reaching side would share a
+//! horizontal connector, and a straight segment from a child's first node
+//! to `P` cuts the columns of the nearer ones. Instead the farthest,
+//! `g_m`, keeps the horizontal connector at `s`, and `g_i` turns at
+//! `s + ε_i`, `ε_1 > ε_2 > … > ε_m = 0`, `ε_1` half the *gap*: how far
+//! above `s` the drawings of the run's members and of the nearer
+//! siblings begin (for a nearer up-reaching sibling, its saddle). Claim:
+//! no two of these arcs cross or overlap, and none crosses anything it did
+//! not cross with its own horizontal connector. *Sketch:* the last piece
+//! of `g_i`, from `(x_i, s + ε_i)` to `P = (x_p, s)`, lies in the strip
+//! `s < y < s + gap` over `x_p < x < x_i`, where the only drawing is of
+//! these pieces (nearer siblings and the members' subtrees begin above
+//! the gap; farther siblings lie beyond `x_m`; a nearer sibling reaching
+//! down to `s` or below is crossed by `g_m`'s horizontal connector too,
+//! and gives no gap). A run's members need not be adjacent (one reaching
+//! both ways may sit beyond all the side's children): the gap then counts
+//! every sibling nearer than its farthest member. Two pieces share only `P`:
+//! for `i < j`, `x_i < x_j` and `ε_i > ε_j`, so `g_j`'s slope
+//! `ε_j / (x_j − x_p)` is smaller than `g_i`'s, and at `x_i` `g_j` passes
+//! below the foot of `g_i`'s column (`s + ε_i`). The bends depend only on
+//! the order, not on the x values, so they hold at every level (pruning
+//! only shrinks ranges and widens gaps). The down-reaching side is the
+//! mirror image. Members reaching both ways are put farthest in the run
+//! (they are passed by the others' pieces only where a crossing is
+//! unavoidable anyway: their range holds `s`).
 //!
 //! **Stable across levels.** The order is fixed; a level gives columns to
 //! its live branches in that order ([`TreeLayout::live_columns`]), so two
 //! nodes shown at two levels are never swapped. Pruning only shrinks the
 //! ranges above, so a level has no crossing its finer levels lack.
 //!
-//! **Cost:** O(b log b) for b branches, once; a level's columns in
-//! O(a log a) for its a live arcs. **Memory:** 9 bytes per branch.
+//! **Across measures.** Every rule above reads the decomposition only
+//! (saddle values, subtree ranges, which way a branch goes) and breaks
+//! ties by the tips' mesh vertices, never by the pruning step. So the
+//! order is a function of the branch decomposition, whatever measure
+//! produced it, and what is guaranteed is: (1) two measures that give the
+//! same decomposition give the same layout; (2) a branch whose whole
+//! subtree is the same under two measures (the same branches: same tips,
+//! same saddles, same nodes on each) has its subtree's columns in the
+//! same left-to-right order under both when it hangs on the same side of
+//! its parent (roots: always), and in exactly the reverse order when on
+//! the other side. Nothing is promised between subtrees that differ:
+//! which child continues its parent's branch at a saddle is what the
+//! measures disagree on, and it moves everything hanging from it.
+//!
+//! **Cost:** O(b log b) for b branches, once (placing a child reaching
+//! both ways scans its parent's pure children); a level's columns in
+//! O(a log a) for its a live arcs. **Memory:** 16 bytes per branch
+//! (order, place, bend), plus 32 per branch while it is made.
 
 use std::sync::Arc;
 
@@ -51,17 +98,61 @@ pub struct TreeLayout {
     order: Vec<u32>,
     /// Per branch: its place in `order`.
     position: Vec<u32>,
-    /// Per branch: its connector is a straight segment (it would run along
-    /// a nearer sibling's at the same saddle).
-    straight: Vec<bool>,
+    /// Per branch: the value at which its connector turns from its column
+    /// towards its saddle: the saddle's own value (a horizontal
+    /// connector), or a little beyond it for all but the farthest child
+    /// of a shared saddle (a slanted last piece; see the module doc).
+    bend: Vec<f64>,
 }
 
 /// How a branch's subtree lies relative to the saddle it hangs from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Reach {
+    /// Everything of it strictly above the saddle.
     Up,
+    /// Everything strictly below.
     Down,
+    /// Some on each side (or level with it).
     Both,
+}
+
+/// Per branch: the value range of its own nodes and of its whole subtree
+/// (its nodes and every descendant's; the saddle it hangs from is not
+/// in it).
+struct Ranges {
+    own_lo: Vec<f64>,
+    own_hi: Vec<f64>,
+    sub_lo: Vec<f64>,
+    sub_hi: Vec<f64>,
+}
+
+impl Ranges {
+    fn new(sim: &Simplification, branches: &Branches) -> Self {
+        let n = branches.len();
+        let (mut own_lo, mut own_hi) = (vec![f64::INFINITY; n], vec![f64::NEG_INFINITY; n]);
+        for v in 0..sim.num_nodes() as u32 {
+            let v = SimplifiedNodeId(v);
+            let b = branches.of_node(v).0 as usize;
+            let x = sim.node_value(v);
+            own_lo[b] = own_lo[b].min(x);
+            own_hi[b] = own_hi[b].max(x);
+        }
+        let (mut sub_lo, mut sub_hi) = (own_lo.clone(), own_hi.clone());
+        // Children have smaller ids than their parents.
+        for k in 0..n {
+            if let Some(p) = branches.parent(BranchId(k as u32)) {
+                let p = p.0 as usize;
+                sub_lo[p] = sub_lo[p].min(sub_lo[k]);
+                sub_hi[p] = sub_hi[p].max(sub_hi[k]);
+            }
+        }
+        Self {
+            own_lo,
+            own_hi,
+            sub_lo,
+            sub_hi,
+        }
+    }
 }
 
 impl TreeLayout {
@@ -69,41 +160,38 @@ impl TreeLayout {
     pub fn new(sim: &Arc<Simplification>) -> Self {
         let branches = Branches::new(sim);
         let n = branches.len();
-        let value = |v: SimplifiedNodeId| sim.node_value(v);
-        let saddle = |b: BranchId| branches.attachment(b).map(value);
-        // Value range of every subtree (the branch, its connector and all
-        // its descendants); children have smaller ids than their parents.
-        let mut lo = vec![f64::INFINITY; n];
-        let mut hi = vec![f64::NEG_INFINITY; n];
-        for k in 0..n {
-            let b = BranchId(k as u32);
-            for v in [branches.tip(b).map(value), saddle(b)]
-                .into_iter()
-                .flatten()
-            {
-                lo[k] = lo[k].min(v);
-                hi[k] = hi[k].max(v);
-            }
-            if let Some(p) = branches.parent(b) {
-                let p = p.0 as usize;
-                lo[p] = lo[p].min(lo[k]);
-                hi[p] = hi[p].max(hi[k]);
-            }
-        }
+        let r = Ranges::new(sim, &branches);
+        let saddle: Vec<f64> = (0..n as u32)
+            .map(|b| {
+                branches
+                    .attachment(BranchId(b))
+                    .map_or(f64::NAN, |v| sim.node_value(v))
+            })
+            .collect();
+        // The drawn range of a subtree: its nodes and its connector, down
+        // (up) to its saddle.
+        let lo: Vec<f64> = (0..n).map(|k| r.sub_lo[k].min(saddle[k])).collect();
+        let hi: Vec<f64> = (0..n).map(|k| r.sub_hi[k].max(saddle[k])).collect();
         let reach = |c: BranchId| {
-            let s = saddle(c).unwrap_or(f64::NAN);
-            let k = c.0 as usize;
-            if lo[k] >= s {
+            let (k, s) = (c.0 as usize, saddle[c.0 as usize]);
+            if r.sub_lo[k] > s {
                 Reach::Up
-            } else if hi[k] <= s {
+            } else if r.sub_hi[k] < s {
                 Reach::Down
             } else {
                 Reach::Both
             }
         };
-        let mut straight = vec![false; n];
-        // Per branch: is it right of its parent (roots: as if left of one,
-        // so their maxima go right).
+        // Ties are broken by the tip's mesh vertex, never by the branch id
+        // (the pruning step), so that the order is a function of the
+        // decomposition alone, whatever measure made it.
+        let key = |c: BranchId| branches.tip(c).map_or(u32::MAX, |v| sim.node_vertex(v));
+        let mut bend = saddle.clone();
+        let span = (0..n)
+            .map(|k| r.sub_hi[k] - r.sub_lo[k])
+            .fold(0.0, f64::max);
+        let tiny = 1e-4 * if span > 0.0 { span } else { 1.0 };
+        // Per branch: is it right of its parent.
         let mut on_right = vec![false; n];
         let mut order = Vec::with_capacity(n);
         enum Visit {
@@ -121,7 +209,8 @@ impl TreeLayout {
             };
             let k = b.0 as usize;
             let is_root = branches.parent(b).is_none();
-            // The side that takes up-reaching children.
+            // The side facing the parent takes the children reaching the
+            // way `b` goes; roots put their up-reaching children right.
             let up_right = if is_root {
                 true
             } else if branches.goes_down(b) {
@@ -129,8 +218,9 @@ impl TreeLayout {
             } else {
                 !on_right[k]
             };
-            let (mut ups, mut downs): (Vec<BranchId>, Vec<BranchId>) = (Vec::new(), Vec::new());
-            let mut both = Vec::new();
+            let up_faces = !is_root && !branches.goes_down(b);
+            let down_faces = !is_root && branches.goes_down(b);
+            let (mut ups, mut downs, mut both) = (Vec::new(), Vec::new(), Vec::new());
             for c in branches.children(b) {
                 match reach(c) {
                     Reach::Up => ups.push(c),
@@ -138,122 +228,77 @@ impl TreeLayout {
                     Reach::Both => both.push(c),
                 }
             }
-            let s = |c: &BranchId| saddle(*c).unwrap_or(0.0);
-            let mut up_s: Vec<f64> = ups.iter().map(s).collect();
-            let mut down_s: Vec<f64> = downs.iter().map(s).collect();
+            let s = |c: BranchId| saddle[c.0 as usize];
+            let mut up_s: Vec<f64> = ups.iter().map(|&c| s(c)).collect();
+            let mut down_s: Vec<f64> = downs.iter().map(|&c| s(c)).collect();
             up_s.sort_by(f64::total_cmp);
             down_s.sort_by(f64::total_cmp);
             let count = |v: &[f64], a: f64, z: f64| {
                 v.partition_point(|&x| x <= z) - v.partition_point(|&x| x < a)
             };
-            // A child reaching both ways goes where it passes or is passed
-            // by the fewest siblings: among the side's children in saddle
-            // order (passed by farther siblings whose saddles lie in its
-            // range), or beyond them all (passing nearer siblings whose
-            // ranges hold its saddle).
-            let (pure_up, pure_down) = (ups.clone(), downs.clone());
             let stabbed = |side: &[BranchId], v: f64| {
                 side.iter()
                     .filter(|c| lo[c.0 as usize] <= v && v <= hi[c.0 as usize])
                     .count()
             };
-            let (mut outer_up, mut outer_down) = (Vec::new(), Vec::new());
-            for m in both {
-                let (sm, k) = (s(&m), m.0 as usize);
-                let costs = [
-                    count(&up_s, lo[k], sm),
-                    count(&down_s, sm, hi[k]),
-                    stabbed(&pure_up, sm),
-                    stabbed(&pure_down, sm),
-                ];
-                let best = (0..4).min_by_key(|&i| costs[i]).unwrap_or(0);
-                match best {
-                    0 => ups.push(m),
-                    1 => downs.push(m),
-                    2 => outer_up.push(m),
-                    _ => outer_down.push(m),
-                }
-            }
-            // Beyond the others, the smaller reach nearer.
-            let extent = |c: &BranchId| hi[c.0 as usize] - lo[c.0 as usize];
-            outer_up.sort_by(|x, y| extent(x).total_cmp(&extent(y)).then(y.cmp(x)));
-            outer_down.sort_by(|x, y| extent(x).total_cmp(&extent(y)).then(y.cmp(x)));
-            // Nearest first; at equal saddles the more important nearer.
-            let at = |c: &BranchId| branches.attachment(*c);
-            let first_up = |x: &BranchId, y: &BranchId| {
-                s(y).total_cmp(&s(x)).then(at(x).cmp(&at(y))).then(y.cmp(x))
+            // `b`'s own connector, at its saddle, passes the subtrees on
+            // the side facing its parent.
+            let s_b = saddle[k];
+            let faced = |m: BranchId, faces: bool| {
+                usize::from(faces && lo[m.0 as usize] < s_b && s_b < hi[m.0 as usize])
             };
-            let first_down = |x: &BranchId, y: &BranchId| {
-                s(x).total_cmp(&s(y)).then(at(x).cmp(&at(y))).then(y.cmp(x))
-            };
-            ups.sort_by(first_up);
-            downs.sort_by(first_down);
-            // Two children of one saddle on one side would share their
-            // connector: the second goes to the other side when that side
-            // has none of the saddle's children, the rest are straight.
-            // Moving a child of a shared saddle to the other side costs
-            // the crossings with that side's farther siblings (its saddle
-            // order): only free moves are made.
-            let cost_down = |c: &BranchId| count(&down_s, s(c), hi[c.0 as usize]);
-            let cost_up = |c: &BranchId| count(&up_s, lo[c.0 as usize], s(c));
-            let split = |side: &mut Vec<BranchId>,
-                         other: &[BranchId],
-                         cost: &dyn Fn(&BranchId) -> usize| {
-                let taken: std::collections::HashSet<_> = other.iter().map(at).collect();
-                let mut moved: Vec<BranchId> = Vec::new();
-                let mut i = 0;
-                while i < side.len() {
-                    let mut j = i + 1;
-                    while j < side.len() && at(&side[j]) == at(&side[i]) {
-                        j += 1;
+            // A child reaching both ways goes where it passes or is passed
+            // by the fewest: among a side's children in saddle order
+            // (passed by farther siblings whose saddles lie in its range),
+            // or beyond them all (passing nearer siblings whose ranges
+            // hold its saddle); plus one if it faces `b`'s parent and its
+            // range holds `b`'s saddle.
+            let (outer_up, outer_down) = {
+                let (pure_up, pure_down) = (ups.clone(), downs.clone());
+                let (mut outer_up, mut outer_down) = (Vec::new(), Vec::new());
+                for m in both {
+                    let (sm, km) = (s(m), m.0 as usize);
+                    let costs = [
+                        count(&up_s, lo[km], sm) + faced(m, up_faces),
+                        count(&down_s, sm, hi[km]) + faced(m, down_faces),
+                        stabbed(&pure_up, sm) + faced(m, up_faces),
+                        stabbed(&pure_down, sm) + faced(m, down_faces),
+                    ];
+                    match (0..4).min_by_key(|&i| costs[i]).unwrap_or(0) {
+                        0 => ups.push(m),
+                        1 => downs.push(m),
+                        2 => outer_up.push(m),
+                        _ => outer_down.push(m),
                     }
-                    if j - i >= 2 && !taken.contains(&at(&side[i])) {
-                        // The least important free member moves.
-                        let pick = (i..j)
-                            .filter(|&m| cost(&side[m]) == 0)
-                            .min_by_key(|&m| side[m]);
-                        if let Some(m) = pick {
-                            moved.push(side.remove(m));
-                            j -= 1;
-                        }
-                    }
-                    i = j;
                 }
-                moved
+                // Beyond the others, the smaller reach nearer.
+                let extent = |c: &BranchId| hi[c.0 as usize] - lo[c.0 as usize];
+                for side in [&mut outer_up, &mut outer_down] {
+                    side.sort_by(|x, y| {
+                        extent(x).total_cmp(&extent(y)).then(key(*x).cmp(&key(*y)))
+                    });
+                }
+                (outer_up, outer_down)
             };
-            let moved_down = split(&mut ups, &downs, &cost_down);
-            let moved_up = split(&mut downs, &ups, &cost_up);
-            ups.extend(moved_up);
-            downs.extend(moved_down);
-            // A fan (children of one saddle left on one side) is drawn as
-            // straight segments from the saddle, the smallest subtrees
-            // nearest, so that the segments to the farther ones pass above
-            // (below) them where they can.
-            let drop = |c: &BranchId| -(hi[c.0 as usize] - lo[c.0 as usize]);
-            let by_up = |x: &BranchId, y: &BranchId| {
+            // Nearest first: up-reaching by saddle from the highest,
+            // down-reaching from the lowest; children of one saddle
+            // together, pure ones nearer than those reaching both ways.
+            let mixed = |c: BranchId| reach(c) == Reach::Both;
+            ups.sort_by(|&x, &y| {
                 s(y).total_cmp(&s(x))
-                    .then(at(x).cmp(&at(y)))
-                    .then(drop(y).total_cmp(&drop(x)))
-                    .then(y.cmp(x))
-            };
-            let by_down = |x: &BranchId, y: &BranchId| {
+                    .then(mixed(x).cmp(&mixed(y)))
+                    .then(key(x).cmp(&key(y)))
+            });
+            downs.sort_by(|&x, &y| {
                 s(x).total_cmp(&s(y))
-                    .then(at(x).cmp(&at(y)))
-                    .then(drop(y).total_cmp(&drop(x)))
-                    .then(y.cmp(x))
-            };
-            ups.sort_by(by_up);
-            downs.sort_by(by_down);
-            for side in [&ups, &downs] {
-                for w in side.windows(2) {
-                    if at(&w[0]) == at(&w[1]) {
-                        straight[w[0].0 as usize] = true;
-                        straight[w[1].0 as usize] = true;
-                    }
-                }
-            }
+                    .then(mixed(x).cmp(&mixed(y)))
+                    .then(key(x).cmp(&key(y)))
+            });
             ups.extend(outer_up);
             downs.extend(outer_down);
+            for (side, up) in [(&ups, true), (&downs, false)] {
+                fan_out(side, up, &saddle, &lo, &hi, &r, &reach, tiny, &mut bend);
+            }
             let (left, right) = if up_right { (downs, ups) } else { (ups, downs) };
             for c in &right {
                 on_right[c.0 as usize] = true;
@@ -275,13 +320,22 @@ impl TreeLayout {
             branches,
             order,
             position,
-            straight,
+            bend,
         }
     }
 
     /// The branch decomposition the layout is made from.
     pub fn branches(&self) -> &Branches {
         &self.branches
+    }
+
+    /// The place of branch `b` in the left-to-right order of all branches
+    /// (a level shows its live ones in this order).
+    pub fn place(&self, b: BranchId) -> Option<usize> {
+        self.position
+            .get(b.0 as usize)
+            .filter(|&&p| p != NONE)
+            .map(|&p| p as usize)
     }
 
     /// Writes the columns of the nodes live at `level` into `columns`
@@ -335,7 +389,7 @@ impl TreeLayout {
 
     /// The polyline drawn for live arc `a`, from its upper node to its
     /// lower one, as (x, value) points: two points along a branch, three
-    /// (with a corner at the saddle's height) for a branch's connector.
+    /// (with a corner at the branch's bend) for a branch's connector.
     /// `x` gives each node's column (from [`TreeLayout::live_columns`]).
     pub fn arc_points(
         &self,
@@ -352,12 +406,13 @@ impl TreeLayout {
         );
         // The child is the branch pruned first; its end leaves the saddle.
         let child = bu.min(bl);
-        if bu == bl || self.straight[child.0 as usize] {
+        let turn = self.bend[child.0 as usize];
+        if bu == bl {
             ArcPoints::new(&[pu, pl])
         } else if bu == child {
-            ArcPoints::new(&[pu, [pu[0], pl[1]], pl])
+            ArcPoints::new(&[pu, [pu[0], turn], pl])
         } else {
-            ArcPoints::new(&[pu, [pl[0], pu[1]], pl])
+            ArcPoints::new(&[pu, [pl[0], turn], pl])
         }
     }
 
@@ -384,6 +439,93 @@ impl TreeLayout {
             })
             .collect();
         LevelLayout { nodes, arcs }
+    }
+}
+
+/// A key ordering f64 values as `total_cmp` does.
+fn ordered(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 { !b } else { b | (1 << 63) }
+}
+
+/// The bends of the children of shared saddles on one side of a branch
+/// (`side` nearest first, `up` for the side that holds the up-reaching
+/// children): of the children of one saddle value `s` on the side, the
+/// farthest keeps a horizontal connector at `s`; the others turn at
+/// `s + ε_i` (`s - ε_i` on the other side), `ε` falling from half the gap
+/// to 0, nearest largest. The gap is how far beyond `s` the drawings of
+/// the members and of every sibling nearer than the farthest member
+/// begin (those that begin beyond it at all); see the module doc for why
+/// this is planar. O(k log k) for k children.
+#[allow(clippy::too_many_arguments)]
+fn fan_out(
+    side: &[BranchId],
+    up: bool,
+    saddle: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    r: &Ranges,
+    reach: &dyn Fn(BranchId) -> Reach,
+    tiny: f64,
+    bend: &mut [f64],
+) {
+    let sign = if up { 1.0 } else { -1.0 };
+    // Where a sibling's drawing begins, seen from the saddles: its low
+    // end on the up side, its high end (negated) on the other, so that
+    // "beyond s" is always "greater than s".
+    let start = |c: BranchId| {
+        let k = c.0 as usize;
+        if up { lo[k] } else { -hi[k] }
+    };
+    // Where a member's own column (its subtree, when pure) begins.
+    let own_start = |c: BranchId| {
+        let k = c.0 as usize;
+        let pure = reach(c) == if up { Reach::Up } else { Reach::Down };
+        match (up, pure) {
+            (true, true) => r.sub_lo[k],
+            (false, true) => -r.sub_hi[k],
+            (true, false) => r.own_lo[k],
+            (false, false) => -r.own_hi[k],
+        }
+    };
+    let at = |i: usize| sign * saddle[side[i].0 as usize];
+    // Groups of one saddle value, each listed by position.
+    let mut by_value: Vec<usize> = (0..side.len()).collect();
+    by_value.sort_by(|&i, &j| at(i).total_cmp(&at(j)).then(i.cmp(&j)));
+    let mut groups: Vec<&[usize]> = by_value
+        .chunk_by(|&i, &j| at(i) == at(j))
+        .filter(|g| g.len() >= 2)
+        .collect();
+    // Sweep the side nearest first; answer each group once every sibling
+    // nearer than its farthest member has been seen.
+    groups.sort_by_key(|g| g[g.len() - 1]);
+    let mut seen = std::collections::BTreeSet::new();
+    let mut next = 0;
+    for g in groups {
+        let last = g[g.len() - 1];
+        while next < last {
+            seen.insert((ordered(start(side[next])), next));
+            next += 1;
+        }
+        let s = at(last);
+        let nearer = seen
+            .range((ordered(s).saturating_add(1), 0)..)
+            .next()
+            .map_or(f64::INFINITY, |&(_, i)| start(side[i]) - s);
+        let gap = g[..g.len() - 1]
+            .iter()
+            .map(|&i| own_start(side[i]) - s)
+            .filter(|&d| d > 0.0)
+            .fold(nearer, f64::min);
+        // No clearance at all (nodes level with the saddle, as on
+        // plateaus): a sliver, so that the pieces still differ in slope
+        // and never run along each other.
+        let gap = if gap.is_finite() { gap } else { tiny };
+        let m = (g.len() - 1) as f64;
+        for (t, &i) in g.iter().enumerate() {
+            let eps = 0.5 * gap * (m - t as f64) / m;
+            bend[side[i].0 as usize] = sign * (s + eps);
+        }
     }
 }
 
