@@ -198,3 +198,24 @@ fn render_without_xdg_runtime_dir_prints_no_error_on_success() {
     assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
     assert!(!stderr.contains("error"), "{stderr}");
 }
+
+#[test]
+fn no_progress_bar_when_standard_error_is_not_a_terminal() {
+    // Long enough for several stages to pass the half second on a slow
+    // machine; the bar must still not appear in a pipe.
+    let run = flexiso(&["tree", "synthetic-noisy:96", "--json", "-"]);
+    assert!(run.success(), "{}", run.stderr);
+    serde_json::from_slice::<serde_json::Value>(&run.stdout_bytes)
+        .expect("stdout is the JSON alone");
+    for bad in ['\r', '\u{1b}', '\u{2801}'] {
+        assert!(
+            !run.stderr.contains(bad),
+            "bar drawn into a pipe: {:?}",
+            run.stderr
+        );
+    }
+    assert!(!run.stderr.contains('%'), "{}", run.stderr);
+    let quiet = flexiso(&["tree", "synthetic-noisy:96", "--json", "-", "-q"]);
+    assert!(quiet.success());
+    assert_eq!(quiet.stderr, "", "-q: nothing on stderr");
+}

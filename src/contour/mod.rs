@@ -172,6 +172,18 @@ impl ContourMesh {
     /// The topology is checked afterwards and the weld undone should it
     /// have changed, so the result always has the Euler characteristic,
     /// boundary and manifoldness the tree predicts.
+    ///
+    /// The check and the undo are for the whole mesh, not per cluster: one
+    /// cluster whose collapse would change the topology (a disk by its own
+    /// count whose collapse still glues two sheets, or makes an edge
+    /// shared by three triangles) keeps *every* cluster of that contour
+    /// unwelded. Such a contour is exported with its zero-area triangles
+    /// and coincident vertices, as the follower made it (still manifold,
+    /// with the predicted topology). Measured on colin27_ch2 at `--iso 64`
+    /// (a data value): 1240 of 1767 contours welded clean; 527 kept
+    /// 419,767 zero-area triangles, 403,909 of them in the largest contour
+    /// (5.36 M triangles). Welding cluster by cluster needs the link
+    /// condition checked locally for each collapse; not done yet.
     pub fn weld(&mut self) {
         let n = self.positions.len();
         if n == 0 {

@@ -345,8 +345,8 @@ pub fn read_series(dir: &Path, files: &[PathBuf], opts: &ReadOptions) -> Result<
         {
             return Err(differs(
                 "pixel type",
-                format!("{}", s.scalar_type()?.name()),
-                format!("{}", first.scalar_type()?.name()),
+                s.scalar_type()?.name().to_owned(),
+                first.scalar_type()?.name().to_owned(),
             ));
         }
         let close =
