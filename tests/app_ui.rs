@@ -434,6 +434,22 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
     assert_eq!(on, want, "the contours sit on the arcs above the join");
     let group = sel[0].group;
     assert!(sel.iter().all(|c| c.group == group), "they move together");
+    let colours: std::collections::HashSet<egui::Color32> = sel.iter().map(|c| c.colour).collect();
+    assert_eq!(
+        colours.len(),
+        sel.len(),
+        "each piece of the split has its own colour"
+    );
+    let markers = &app.tree_panel().drawn.markers;
+    assert_eq!(markers.len(), sel.len(), "each piece has its marker");
+    for (i, a) in markers.iter().enumerate() {
+        for b in &markers[i + 1..] {
+            assert!(
+                a.1.distance(b.1) >= 4.0,
+                "markers {a:?} and {b:?} are stacked"
+            );
+        }
+    }
     assert!(
         sel.iter()
             .all(|c| c.mesh.as_ref().is_some_and(|m| m.num_triangles() > 0)),
@@ -449,6 +465,8 @@ fn dragging_a_marker_up_through_a_join_splits_the_contour_into_the_arcs_above() 
 #[test]
 fn all_contours_at_h_extracts_every_component_in_the_background() {
     let (mut h, gpu) = explorer();
+    // The option: every component (the default is one per shown arc).
+    h.state_mut().set_every_component(true);
     h.state_mut().set_show_all(true);
     h.run_steps(2);
     let ctx = h.ctx.clone();
@@ -697,4 +715,286 @@ fn a_volume_dropped_on_the_window_opens() {
     let ds = app.dataset().expect("opened");
     assert_eq!(ds.name, "blob.nrrd");
     assert_eq!(ds.field.dims(), [6, 5, 4]);
+}
+
+/// The explorer as the window opens `field`: the first screen.
+fn first_screen(field: flexiso::field::ScalarField) -> (Harness<'static, FlexisoApp>, bool) {
+    let gpu = common::gpu().is_some();
+    let builder = Harness::builder()
+        .with_size(egui::vec2(1600.0, 1000.0))
+        .with_pixels_per_point(1.0);
+    let builder = if gpu { builder.wgpu() } else { builder };
+    let mut h = builder.build_eframe(move |_cc| FlexisoApp::new_for_test_first_screen(field));
+    h.run_steps(3);
+    settle(&mut h);
+    h.run_steps(3);
+    (h, gpu)
+}
+
+/// What every first screen shows: a level on the curve's widest plateau
+/// of a readable size, at least three contours (the most important
+/// branches), each extracted, in its own colour, marked on the tree, and
+/// the 3D view framed on them.
+fn check_first_screen(h: &Harness<'_, FlexisoApp>, name: &str) {
+    use flexiso::simplify::overview::{FIRST_SCREEN_ARCS, first_screen_step};
+    let app = h.state();
+    let level = app.level().expect("a level");
+    let sim = level.simplification();
+    assert_eq!(
+        level.step(),
+        first_screen_step(sim),
+        "{name}: the plateau level"
+    );
+    assert!(
+        FIRST_SCREEN_ARCS.contains(&level.num_arcs()),
+        "{name}: {} arcs shown",
+        level.num_arcs()
+    );
+    let sel = &app.selection().contours;
+    assert!(
+        sel.len() >= 3,
+        "{name}: {} contours on the first screen",
+        sel.len()
+    );
+    assert!(sel.len() <= 6, "{name}: {} contours", sel.len());
+    let colours: std::collections::HashSet<egui::Color32> = sel.iter().map(|c| c.colour).collect();
+    assert_eq!(colours.len(), sel.len(), "{name}: each in its own colour");
+    for c in sel {
+        let m = c.mesh.as_ref().expect("extracted");
+        assert!(m.num_triangles() > 0, "{name}: contour #{} is empty", c.id);
+        assert!(
+            level.live_arc_of(c.superarc).is_some(),
+            "{name}: contour #{} lies on a shown arc",
+            c.id
+        );
+    }
+    assert_eq!(
+        app.tree_panel().drawn.markers.len(),
+        sel.len(),
+        "{name}: all marked"
+    );
+    assert!(!app.framing_pending(), "{name}: the 3D view was framed");
+    // Framed on the contours: the camera looks at the middle of their box.
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for c in sel {
+        let m = c.mesh.as_ref().expect("extracted");
+        for p in &m.positions {
+            for (k, &pk) in p.iter().enumerate() {
+                lo[k] = lo[k].min(pk);
+                hi[k] = hi[k].max(pk);
+            }
+        }
+    }
+    let t = app.view3d().camera.target.to_array();
+    for (k, &tk) in t.iter().enumerate() {
+        let mid = 0.5 * (lo[k] + hi[k]);
+        assert!(
+            (tk - mid).abs() <= 0.02 * (hi[k] - lo[k]).max(1.0),
+            "{name}: camera target {t:?}, contours' box {lo:?}..{hi:?}"
+        );
+    }
+}
+
+#[test]
+fn the_first_screen_of_the_default_dataset_shows_at_least_three_contours() {
+    let source = flexiso::field::source::VolumeSource::parse(
+        "synthetic",
+        flexiso::field::io::ReadOptions::default(),
+    )
+    .expect("the built-in dataset");
+    let field = source.load().expect("generated").field;
+    let (h, _) = first_screen(field);
+    check_first_screen(&h, "synthetic");
+}
+
+#[test]
+fn the_first_screen_of_colin27_ch2_shows_at_least_three_contours() {
+    let Some(path) = common::data::dataset("colin27_ch2.nrrd") else {
+        return;
+    };
+    let source = flexiso::field::source::VolumeSource::parse(
+        path.to_str().expect("a UTF-8 path"),
+        flexiso::field::io::ReadOptions::default(),
+    )
+    .expect("a volume");
+    let field = source.load().expect("read").field;
+    let (h, _) = first_screen(field);
+    check_first_screen(&h, "colin27_ch2");
+}
+
+#[test]
+fn hovering_an_arc_says_what_it_is_and_previews_its_contour_dimmed() {
+    use flexiso::app::jobs::preview::PreviewState;
+    let (mut h, gpu) = explorer();
+    let (arc, p) = tallest_arc(&h);
+    h.hover_at(p);
+    h.run_steps(2);
+    let app = h.state();
+    let info = app
+        .tree_panel()
+        .hover_info
+        .clone()
+        .expect("the hovered arc's info");
+    assert_eq!(info.arc, arc);
+    let ds = app.dataset().expect("dataset");
+    let n: u64 = ds.field.dims().iter().map(|&d| d as u64).product();
+    let sides = info.sides.expect("the sides of its contours");
+    assert!(
+        sides.above + sides.below >= n,
+        "{sides:?} cover the {n} voxels"
+    );
+    assert!(sides.enclosed().0 <= n / 2 + 1 || sides.above.min(sides.below) == sides.enclosed().0);
+    let e = info.extent.expect("where its contours lie");
+    for (k, &d) in ds.field.dims().iter().enumerate() {
+        assert!(e.min[k] <= e.max[k] && e.max[k] < d);
+    }
+    let text = info.describe(ds.field.spacing());
+    assert!(
+        text.contains("voxels") && text.contains("lies in"),
+        "{text}"
+    );
+    // The preview is the contour a click would select.
+    let want = flexiso::app::panels::tree::TreePanel::contour_of_arc(
+        ds,
+        app.level().expect("level"),
+        arc,
+        app.global_h(),
+    )
+    .expect("the arc has a contour");
+    assert_eq!(app.preview().key(), Some((want.0, want.1.to_bits())));
+    h.state_mut().wait_for_preview();
+    h.run_steps(2);
+    let app = h.state();
+    assert_eq!(app.preview().state, PreviewState::Ready);
+    assert!(app.preview().mesh.is_some(), "a preview mesh");
+    assert!(
+        app.selection().contours.is_empty(),
+        "hovering selects nothing"
+    );
+    if gpu {
+        assert!(app.view3d().mesh_ids().contains(&SceneKey::Preview));
+    }
+    // Moving off the arcs ends it.
+    let corner = app.tree_panel().drawn.rect.expect("drawn").min + egui::vec2(3.0, 3.0);
+    h.hover_at(corner);
+    h.run_steps(2);
+    assert!(h.state().tree_panel().hovered.is_none());
+    assert_eq!(h.state().preview().key(), None);
+    assert!(h.state().preview().mesh.is_none());
+}
+
+#[test]
+fn all_contours_at_h_shows_one_contour_per_arc_of_the_shown_tree() {
+    let (mut h, gpu) = explorer();
+    h.state_mut().set_level_arcs(12);
+    h.state_mut().set_show_all(true);
+    h.run_steps(2);
+    let ctx = h.ctx.clone();
+    h.state_mut().wait_for_all_contours(&ctx);
+    h.run_steps(2);
+    let app = h.state();
+    let level = app.level().expect("level");
+    let sim = level.simplification();
+    let hv = app.global_h();
+    let spanning: Vec<SimplifiedArcId> = level
+        .arcs()
+        .filter(|a| sim.node_value(a.lower) <= hv && hv < sim.node_value(a.upper))
+        .map(|a| a.id)
+        .collect();
+    assert!(!spanning.is_empty());
+    let arcs = app.all_contour_arcs();
+    assert_eq!(
+        arcs.len(),
+        spanning.len(),
+        "one contour per shown arc spanning h"
+    );
+    let mut on: Vec<SimplifiedArcId> = arcs
+        .iter()
+        .map(|s| level.live_arc_of(*s).expect("on a shown arc"))
+        .collect();
+    on.sort();
+    on.dedup();
+    assert_eq!(on.len(), spanning.len(), "each on its own arc");
+    let every = {
+        let ds = app.dataset().expect("dataset");
+        flexiso::contour::all_contours(&ds.tree, &ds.field, flexiso::field::Isovalue::new(hv))
+            .iter()
+            .filter(|m| !m.indices.is_empty())
+            .count()
+    };
+    assert!(every >= arcs.len());
+    if gpu {
+        for _ in 0..20 {
+            if h.state().all_contours_on_screen() {
+                break;
+            }
+            h.run_steps(1);
+        }
+        assert!(h.state().all_contours_on_screen(), "uploaded");
+    }
+    // The option shows every component.
+    h.state_mut().set_every_component(true);
+    h.run_steps(2);
+    h.state_mut().wait_for_all_contours(&ctx);
+    h.run_steps(2);
+    assert_eq!(h.state().all_contours_shown(), every);
+}
+
+#[test]
+fn a_hidden_contour_has_a_way_back_to_the_level_that_shows_its_arc() {
+    let (mut h, _) = explorer();
+    // The contour of the branch pruned first among those shown.
+    let (arc, step) = {
+        let app = h.state();
+        let level = app.level().expect("level");
+        let b = app.dataset().expect("dataset").layout.branches();
+        level
+            .arcs()
+            .map(|a| (a.id, b.of_arc(a.id)))
+            .filter(|(_, br)| (br.0 as usize) < b.steps())
+            .min_by_key(|(_, br)| *br)
+            .map(|(a, br)| (a, br.0 as usize))
+            .expect("a pruned branch is shown")
+    };
+    h.state_mut().select_arc(arc, true);
+    settle(&mut h);
+    h.state_mut().set_level_arcs(1);
+    h.run_steps(3);
+    let s = h.state().selection().contours[0].superarc;
+    assert!(h.state().level().expect("level").live_arc_of(s).is_none());
+    h.get_by_label(flexiso::app::panels::contour_list::SHOW_ARC)
+        .click();
+    h.run_steps(6);
+    let level = h.state().level().expect("level");
+    assert_eq!(level.step(), step, "the coarsest level that shows the arc");
+    assert!(level.live_arc_of(s).is_some(), "its arc is shown again");
+    assert_eq!(
+        h.state().tree_panel().drawn.markers.len(),
+        1,
+        "and its marker"
+    );
+}
+
+#[test]
+fn fitting_frames_the_whole_box_in_a_narrow_view() {
+    use flexiso::app::panels::view3d::fit_in_view;
+    let (lo, hi) = ([0.0f32, 0.0, 0.0], [100.0f32, 60.0, 40.0]);
+    for aspect in [0.4f32, 0.7, 1.0, 1.8] {
+        let mut cam = flexiso::render::Camera::default();
+        fit_in_view(&mut cam, lo, hi, aspect);
+        let m = cam.view_proj(aspect);
+        for i in 0..8 {
+            let c = glam::Vec3::new(
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            );
+            let p = m.project_point3(c);
+            assert!(
+                p.x.abs() <= 1.0 && p.y.abs() <= 1.0,
+                "aspect {aspect}: corner {c} at {p} is cut off"
+            );
+        }
+    }
 }

@@ -127,9 +127,9 @@ pub struct FlexisoApp {
     /// A newly opened volume shows its most important branches as
     /// contours (the window; tests start from an empty scene).
     first_screen: bool,
-    /// The first screen's contours, to frame the 3D view on once their
-    /// meshes are in.
-    frame_pending: Vec<ContourId>,
+    /// The first screen's contours (id, superarc, isovalue), to frame the
+    /// 3D view on once their meshes are in.
+    frame_pending: Vec<(ContourId, crate::tree::ArcId, f64)>,
     /// The hover preview of the arc under the pointer.
     preview: Preview,
 }
@@ -468,10 +468,10 @@ impl FlexisoApp {
             if let Some(seed) =
                 crate::contour::path_seed_in_chain(&ds.tree, &ds.field, la.chain, iso)
             {
-                ids.push(
-                    self.selection
-                        .add(&ds.field, &ds.tree, seed.arc, f.h, false),
-                );
+                let id = self
+                    .selection
+                    .add(&ds.field, &ds.tree, seed.arc, f.h, false);
+                ids.push((id, seed.arc, f.h));
             }
         }
         self.selection.active = None;
@@ -487,8 +487,18 @@ impl FlexisoApp {
         let contours: Vec<&selection::Contour> = self
             .frame_pending
             .iter()
-            .filter_map(|id| self.selection.get(*id))
+            .filter_map(|&(id, s, h)| {
+                self.selection
+                    .get(id)
+                    .filter(|c| c.superarc == s && c.h == h)
+            })
             .collect();
+        // The user changed the scene meanwhile (ids restart after a
+        // clear): the view is theirs, not the first screen's.
+        if contours.len() != self.frame_pending.len() {
+            self.frame_pending.clear();
+            return;
+        }
         if contours.iter().any(|c| c.extracting()) {
             return;
         }
@@ -870,8 +880,10 @@ impl FlexisoApp {
             extracting: self.selection.extracting(),
             all: (
                 self.show_all,
-                // Done only once the meshes are on screen (uploaded).
-                self.all.extracting() || (self.show_all && self.view3d.uploading),
+                // Done only once the meshes are on screen (uploaded); just
+                // switched on, the extraction is about to start.
+                self.all.extracting()
+                    || (self.show_all && (!self.all.started() || self.view3d.uploading)),
                 self.all.meshes.len(),
                 self.all.millis,
             ),
