@@ -29,10 +29,20 @@
 //! [`Simplification::chain`] is a slice, and a contour at isovalue `h` on
 //! any arc is found by binary search on it. No arc owns a heap allocation.
 //!
+//! **Cost.** The sequence pops leaves in cost order, which is no order in
+//! memory: on trees of millions of arcs its time is its cache misses. So
+//! the state a step reads of an arc (ends, both costs, alive) is one
+//! 32-byte record and that of a node (live arcs up and down, counted and
+//! XORed) one 16-byte record: a prune visits one arc and two nodes, a
+//! reduction two arcs and two nodes more, one miss each. Finding the
+//! starting leaves and writing the step diffs are parallel passes.
+//! O(n log n) overall: the sort of the starting leaves and the heap.
+//!
 //! **Memory:** per arc id (at most twice the collapsed arcs) 40 bytes; per
 //! step 52 bytes (the step and its diff); per original superarc 4 bytes (the chain array); a
 //! [`SimplifiedTree`] adds 8 bytes per arc id and 8 per node; the
-//! steps are also kept as 28-byte diffs for the level view.
+//! steps are also kept as 28-byte diffs for the level view. While the
+//! sequence runs: 32 bytes per arc id and 16 per node.
 
 mod adjacency;
 pub mod branches;
