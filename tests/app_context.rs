@@ -13,7 +13,7 @@ use flexiso::session::Session;
 
 mod common;
 
-use common::harness::{click, settle};
+use common::harness::{click, settle, synthetic_explorer};
 
 /// Two separate bumps on a 32³ grid, centred at x = 9 and x = 23 (y = z
 /// = 16): seen from +x, the second hides the first.
@@ -242,22 +242,6 @@ fn slices_clip_and_view_switches_are_saved_in_the_session() {
     assert_eq!((p.slices.index[0], p.slices.index[2]), (5, 20));
     assert!(p.clip.on && p.clip.axis == 2 && !p.clip.keep_below);
     assert!(g.state().view_options().labels);
-}
-
-/// The explorer on `synthetic:24` (a volume a session can name).
-fn synthetic_explorer() -> Harness<'static, FlexisoApp> {
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1200.0, 800.0))
-        .with_pixels_per_point(1.0)
-        .build_eframe(|_cc| {
-            let mut app = FlexisoApp::empty();
-            app.open("synthetic:24");
-            app.wait_for_job();
-            app
-        });
-    h.run_steps(3);
-    assert!(h.state().dataset().is_some());
-    h
 }
 
 #[test]

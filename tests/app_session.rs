@@ -12,22 +12,7 @@ use flexiso::session::Session;
 
 mod common;
 
-/// The explorer on `synthetic:24` (a volume a session can name), in a
-/// 1200×800 window.
-fn explorer() -> Harness<'static, FlexisoApp> {
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(1200.0, 800.0))
-        .with_pixels_per_point(1.0)
-        .build_eframe(|_cc| {
-            let mut app = FlexisoApp::empty();
-            app.open("synthetic:24");
-            app.wait_for_job();
-            app
-        });
-    h.run_steps(3);
-    assert!(h.state().dataset().is_some());
-    h
-}
+use common::harness::synthetic_explorer as explorer;
 
 /// An empty explorer (no volume yet), as at the program's start.
 fn fresh() -> Harness<'static, FlexisoApp> {

@@ -796,15 +796,18 @@ fn check_first_screen(h: &Harness<'_, FlexisoApp>, name: &str) {
     }
 }
 
+/// The volume `spec` names (a path or `synthetic`), read as the CLI would.
+fn load(spec: &str) -> flexiso::field::ScalarField {
+    flexiso::field::source::VolumeSource::parse(spec, flexiso::field::io::ReadOptions::default())
+        .expect("a volume")
+        .load()
+        .expect("read")
+        .field
+}
+
 #[test]
 fn the_first_screen_of_the_default_dataset_shows_at_least_three_contours() {
-    let source = flexiso::field::source::VolumeSource::parse(
-        "synthetic",
-        flexiso::field::io::ReadOptions::default(),
-    )
-    .expect("the built-in dataset");
-    let field = source.load().expect("generated").field;
-    let (h, _) = first_screen(field);
+    let (h, _) = first_screen(load("synthetic"));
     check_first_screen(&h, "synthetic");
 }
 
@@ -813,13 +816,7 @@ fn the_first_screen_of_colin27_ch2_shows_at_least_three_contours() {
     let Some(path) = common::data::dataset("colin27_ch2.nrrd") else {
         return;
     };
-    let source = flexiso::field::source::VolumeSource::parse(
-        path.to_str().expect("a UTF-8 path"),
-        flexiso::field::io::ReadOptions::default(),
-    )
-    .expect("a volume");
-    let field = source.load().expect("read").field;
-    let (h, _) = first_screen(field);
+    let (h, _) = first_screen(load(path.to_str().expect("a UTF-8 path")));
     check_first_screen(&h, "colin27_ch2");
 }
 

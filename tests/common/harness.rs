@@ -61,3 +61,20 @@ pub fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
         .max_by(|x, y| span(x.0).total_cmp(&span(y.0)))
         .expect("the tree panel drew arcs")
 }
+
+/// The explorer on `synthetic:24` (a volume a session can name), in a
+/// 1200×800 window, its pipeline already run.
+pub fn synthetic_explorer() -> Harness<'static, FlexisoApp> {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .with_pixels_per_point(1.0)
+        .build_eframe(|_cc| {
+            let mut app = FlexisoApp::empty();
+            app.open("synthetic:24");
+            app.wait_for_job();
+            app
+        });
+    h.run_steps(3);
+    assert!(h.state().dataset().is_some());
+    h
+}
