@@ -9,16 +9,13 @@
 //! what the contour tree costs beyond the input.
 //!
 //! After the tree come the columns of simplification: arcs left once
-//! zero-height arcs are collapsed, seconds to the measures (`meas`,
-//! Algorithm 1), the collapse (`coll`) and the whole pruning sequence
-//! under hypervolume (`prune`), their sum (`simp`), and the slowest of a
-//! series of level changes (full tree, 100 arcs, random levels, back), in
-//! milliseconds.
+//! zero-height arcs are collapsed, seconds to the measures (hypervolume)
+//! plus the whole pruning sequence, and the slowest of a series of level
+//! changes (full tree, 100 arcs, random levels, back), in milliseconds.
 
 use crate::field::ScalarField;
 use crate::field::io::{ReadOptions, read_volume};
 use crate::field::synthetic::Synthetic;
-use crate::measure::geometric::ArcRegions;
 use crate::progress::Progress;
 use crate::simplify::{CollapsedTree, Measure, Simplification, SimplifiedTree};
 use crate::tree::ContourTree;
@@ -75,9 +72,6 @@ pub struct Row {
     pub collapsed: usize,
     /// Seconds to collapse, measure and compute the pruning sequence.
     pub simplification: Duration,
-    /// Its parts: the measures (Algorithm 1), the collapse of zero-height
-    /// arcs, the pruning sequence.
-    pub simplification_parts: [Duration; 3],
     /// Slowest single level change.
     pub level_change: Duration,
 }
@@ -155,7 +149,7 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             Err(_) => unreachable!("nobody cancels a benchmark"),
         };
         let peak = peak_rss();
-        let (collapsed, simplification_parts, level_change) = simplification_times(&tree, field);
+        let (collapsed, simplification, level_change) = simplification_times(&tree, field);
         let row = Row {
             name: name.to_owned(),
             dims: field.dims(),
@@ -165,8 +159,7 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             peak_rss: peak,
             engine_bytes: peak.saturating_sub(base),
             collapsed,
-            simplification: simplification_parts.iter().sum(),
-            simplification_parts,
+            simplification,
             level_change,
         };
         drop(tree);
@@ -182,20 +175,11 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
 
 /// Collapse, measures and pruning sequence (hypervolume), then the slowest
 /// of a series of level changes: what a user feels when moving the slider.
-fn simplification_times(
-    tree: &ContourTree,
-    field: &ScalarField,
-) -> (usize, [Duration; 3], Duration) {
+fn simplification_times(tree: &ContourTree, field: &ScalarField) -> (usize, Duration, Duration) {
     let t = Instant::now();
-    let regions = ArcRegions::new(tree, field);
-    let measures = t.elapsed();
-    let t = Instant::now();
-    let collapsed = CollapsedTree::with_regions(tree, field, &regions);
-    drop(regions);
-    let collapse = t.elapsed();
-    let t = Instant::now();
+    let collapsed = CollapsedTree::new(tree, field);
     let sim = Simplification::from_collapsed(&collapsed, Measure::Hypervolume);
-    let sequence = [measures, collapse, t.elapsed()];
+    let sequence = t.elapsed();
     let arcs = collapsed.num_arcs();
     drop(collapsed);
     let mut level = SimplifiedTree::new(Arc::new(sim));
@@ -221,7 +205,7 @@ fn simplification_times(
 /// The table header.
 pub fn header() -> String {
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>8}",
         "dataset",
         "dims",
         "superarcs",
@@ -237,9 +221,6 @@ pub fn header() -> String {
         "peak MiB",
         "B/vert",
         "collapsed",
-        "meas",
-        "coll",
-        "prune",
         "simp",
         "level ms"
     )
@@ -250,7 +231,7 @@ pub fn format_row(r: &Row) -> String {
     let n = (r.dims[0] * r.dims[1] * r.dims[2]) as f64;
     let s = |d: Duration| format!("{:.3}", d.as_secs_f64());
     format!(
-        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>6} {:>6} {:>6} {:>8.3}",
+        "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>8.3}",
         r.name,
         format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
         r.superarcs,
@@ -266,9 +247,6 @@ pub fn format_row(r: &Row) -> String {
         r.peak_rss as f64 / (1 << 20) as f64,
         r.engine_bytes as f64 / n,
         r.collapsed,
-        s(r.simplification_parts[0]),
-        s(r.simplification_parts[1]),
-        s(r.simplification_parts[2]),
         s(r.simplification),
         r.level_change.as_secs_f64() * 1e3,
     )

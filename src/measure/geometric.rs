@@ -166,10 +166,7 @@ impl ArcRegions {
         if nodes.is_empty() {
             return Self { below, above };
         }
-        // Each node's value read once (the passes visit nodes in no order,
-        // and the values array is far larger than the cache).
-        let node_value: Vec<f64> = nodes.iter().map(|n| field.value(n.vertex)).collect();
-        let value = |n: NodeId| node_value[n.0 as usize];
+        let value = |n: NodeId| field.value(tree.node(n).vertex);
         // Update for the regular vertices of each arc: count, sum, and their
         // extremes (the first and last, since they ascend).
         // In parallel over the arcs, on the values in their own type.
@@ -184,7 +181,8 @@ impl ArcRegions {
                 .collect()
         });
         let (total_count, total_sum) = {
-            let s: f64 = regular.iter().map(|r| r.1).sum::<f64>() + node_value.iter().sum::<f64>();
+            let s: f64 = regular.iter().map(|r| r.1).sum::<f64>()
+                + nodes.iter().map(|n| field.value(n.vertex)).sum::<f64>();
             (field.len() as u64, s)
         };
         let global_min = value(NodeId(0));
@@ -193,24 +191,17 @@ impl ArcRegions {
         // Pass 1, rooted at the global minimum: count, sum, min, max of
         // every child side.
         let (order, parent) = rooted_order(tree, NodeId(0));
-        // Per node, the side below it in the rooted tree: count, sum, min,
-        // max in one record (one cache miss per node visited, not four).
-        #[derive(Clone, Copy)]
-        struct Side {
-            count: u64,
-            sum: f64,
-            min: f64,
-            max: f64,
+        let mut sub_count = vec![0u64; nodes.len()];
+        let mut sub_sum = vec![0f64; nodes.len()];
+        let mut sub_min = vec![0f64; nodes.len()];
+        let mut sub_max = vec![0f64; nodes.len()];
+        for (i, n) in nodes.iter().enumerate() {
+            let f = field.value(n.vertex);
+            sub_count[i] = 1;
+            sub_sum[i] = f;
+            sub_min[i] = f;
+            sub_max[i] = f;
         }
-        let mut sub: Vec<Side> = node_value
-            .iter()
-            .map(|&f| Side {
-                count: 1,
-                sum: f,
-                min: f,
-                max: f,
-            })
-            .collect();
         for &v in order.iter().rev() {
             let p = parent[v.0 as usize];
             if p == NO_ARC {
@@ -221,10 +212,9 @@ impl ArcRegions {
             let (rc, rs) = regular[p as usize];
             let vi = v.0 as usize;
             // Combine the child side with the arc's own regular vertices.
-            let here = sub[vi];
-            let count = here.count + rc;
-            let sum = here.sum + rs;
-            let (mut lo, mut hi) = (here.min, here.max);
+            let count = sub_count[vi] + rc;
+            let sum = sub_sum[vi] + rs;
+            let (mut lo, mut hi) = (sub_min[vi], sub_max[vi]);
             if let (Some(&first), Some(&last)) = (vs.first(), vs.last()) {
                 lo = lo.min(field.value(first));
                 hi = hi.max(field.value(last));
@@ -261,19 +251,19 @@ impl ArcRegions {
             // Combine into the parent node.
             let u = if arc.lower == v { arc.upper } else { arc.lower };
             let ui = u.0 as usize;
-            let there = &mut sub[ui];
-            there.count += count;
-            there.sum += sum;
-            there.min = there.min.min(lo);
-            there.max = there.max.max(hi);
+            sub_count[ui] += count;
+            sub_sum[ui] += sum;
+            sub_min[ui] = sub_min[ui].min(lo);
+            sub_max[ui] = sub_max[ui].max(hi);
         }
 
         // Pass 2, rooted at the global maximum: the max of the sides above
         // arcs whose upper side held the minimum in pass 1.
         let top = NodeId(nodes.len() as u32 - 1);
         let (order, parent) = rooted_order(tree, top);
-        drop(sub);
-        let mut sub_max = node_value;
+        for (i, n) in nodes.iter().enumerate() {
+            sub_max[i] = field.value(n.vertex);
+        }
         for &v in order.iter().rev() {
             let p = parent[v.0 as usize];
             if p == NO_ARC {
@@ -326,23 +316,22 @@ const NO_ARC: u32 = u32::MAX;
 fn rooted_order(tree: &ContourTree, root: NodeId) -> (Vec<NodeId>, Vec<u32>) {
     let n = tree.nodes().len();
     let mut parent = vec![NO_ARC; n];
+    let mut seen = vec![false; n];
     let mut order = Vec::with_capacity(n);
     order.push(root);
+    seen[root.0 as usize] = true;
     let mut head = 0;
     while head < order.len() {
         let v = order[head];
         head += 1;
-        // In a tree the only neighbour already reached is the parent, so
-        // no visited marks are needed (one random access less per node).
-        let from = parent[v.0 as usize];
         for &a in tree.up_arcs(v).iter().chain(tree.down_arcs(v)) {
-            if a.0 == from {
-                continue;
-            }
             let arc = tree.arc(a);
             let u = if arc.lower == v { arc.upper } else { arc.lower };
-            parent[u.0 as usize] = a.0;
-            order.push(u);
+            if !seen[u.0 as usize] {
+                seen[u.0 as usize] = true;
+                parent[u.0 as usize] = a.0;
+                order.push(u);
+            }
         }
     }
     (order, parent)

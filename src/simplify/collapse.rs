@@ -153,24 +153,8 @@ impl CollapsedTree {
             above.push(*regions.above(bottom));
         }
         // Canonical order: by (lower, upper) node, like the tree's arcs.
-        // The keys are unique (every superarc is the bottom of one chain at
-        // most), so an unstable sort is deterministic; sorting the keys
-        // themselves, not indices into three arrays, keeps it in cache.
-        let mut keyed: Vec<(u32, u32, u32, u32)> = (0..arcs.len())
-            .map(|a| {
-                (
-                    arcs[a].1,
-                    arcs[a].0,
-                    chain[chain_offsets[a] as usize].0,
-                    a as u32,
-                )
-            })
-            .collect();
-        {
-            use rayon::prelude::*;
-            keyed.par_sort_unstable();
-        }
-        let perm: Vec<usize> = keyed.into_iter().map(|k| k.3 as usize).collect();
+        let mut perm: Vec<usize> = (0..arcs.len()).collect();
+        perm.sort_unstable_by_key(|&a| (arcs[a].1, arcs[a].0, chain[chain_offsets[a] as usize]));
         let mut s_offsets = vec![0u32];
         let mut s_chain = Vec::with_capacity(chain.len());
         for &a in &perm {

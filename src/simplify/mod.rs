@@ -29,20 +29,10 @@
 //! [`Simplification::chain`] is a slice, and a contour at isovalue `h` on
 //! any arc is found by binary search on it. No arc owns a heap allocation.
 //!
-//! **Cost.** The sequence pops leaves in cost order, which is no order in
-//! memory: on trees of millions of arcs its time is its cache misses. So
-//! the state a step reads of an arc (ends, both costs, alive) is one
-//! 32-byte record and that of a node (live arcs up and down, counted and
-//! XORed) one 16-byte record: a prune visits one arc and two nodes, a
-//! reduction two arcs and two nodes more, one miss each. Finding the
-//! starting leaves and writing the step diffs are parallel passes.
-//! O(n log n) overall: the sort of the starting leaves and the heap.
-//!
 //! **Memory:** per arc id (at most twice the collapsed arcs) 40 bytes; per
 //! step 52 bytes (the step and its diff); per original superarc 4 bytes (the chain array); a
 //! [`SimplifiedTree`] adds 8 bytes per arc id and 8 per node; the
-//! steps are also kept as 28-byte diffs for the level view. While the
-//! sequence runs: 32 bytes per arc id and 16 per node.
+//! steps are also kept as 28-byte diffs for the level view.
 
 mod adjacency;
 pub mod branches;
@@ -193,31 +183,24 @@ impl Simplification {
         let node_value: Vec<f64> = (0..n as u32).map(|v| base.node_value(v)).collect();
         let node_vertex: Vec<u32> = (0..n as u32).map(|v| base.node_vertex(v)).collect();
         let mut tree = Pruning::new(base, measure, &node_value);
-        let mut queue = PruningQueue::new({
-            use rayon::prelude::*;
-            (0..m as u32)
-                .into_par_iter()
-                .filter_map(|a| tree.leaf_entry(a))
-                .collect()
-        });
-        // Every step prunes an arc for good: fewer steps than arcs.
-        let mut steps = Vec::with_capacity(m);
+        let mut queue =
+            PruningQueue::new((0..m as u32).filter_map(|a| tree.leaf_entry(a)).collect());
+        let mut steps = Vec::new();
         while let Some(Entry { cost, arc: a }) = queue.pop() {
             let Some((s, lower_leaf)) = tree.prunable(a) else {
                 continue;
             };
             tree.leaf_prune(a);
             let mut reduced = None;
-            let node = tree.nodes[s as usize];
-            if node.n_up == 1 && node.n_down == 1 {
+            if tree.n_up[s as usize] == 1 && tree.n_down[s as usize] == 1 {
                 // Rule 1: vertex reduction.
                 let d = tree.vertex_reduction(s);
                 queue.extend(tree.leaf_entry(d));
                 reduced = Some(SimplifiedArcId(d));
-            } else if node.degree() == 1 {
+            } else if tree.degree(s) == 1 {
                 // A node with arcs in one direction only (a collapsed
                 // plateau) has become a leaf.
-                let r = node.x_up ^ node.x_down;
+                let r = tree.x_up[s as usize] ^ tree.x_down[s as usize];
                 queue.extend(tree.leaf_entry(r));
             }
             steps.push(Step {
@@ -227,13 +210,15 @@ impl Simplification {
                 reduced,
             });
         }
-        let Pruning { arcs, parts, .. } = tree;
-        let upper: Vec<u32> = arcs.iter().map(|a| a.upper).collect();
-        let lower: Vec<u32> = arcs.iter().map(|a| a.lower).collect();
-        let up_cost: Vec<f64> = arcs.iter().map(|a| a.up_cost).collect();
-        let down_cost: Vec<f64> = arcs.iter().map(|a| a.down_cost).collect();
-        let total_arcs = arcs.len();
-        drop(arcs);
+        let Pruning {
+            upper,
+            lower,
+            up_cost,
+            down_cost,
+            alive,
+            parts,
+            ..
+        } = tree;
         let mut curve = Vec::with_capacity(steps.len() + 1);
         let (mut arcs, mut feature) = (m, 0.0f64);
         curve.push(CurvePoint {
@@ -248,32 +233,29 @@ impl Simplification {
                 feature_size: feature,
             });
         }
-        let diffs = {
-            use rayon::prelude::*;
-            steps
-                .par_iter()
-                .map(|s| {
-                    let p = s.pruned.0 as usize;
-                    let (made, e1, e2, reduced) = match s.reduced {
-                        Some(d) => {
-                            let (e1, e2) = parts[d.0 as usize - m];
-                            (d.0, e1, e2, lower[e1 as usize])
-                        }
-                        None => (NONE, NONE, NONE, NONE),
-                    };
-                    StepDiff {
-                        pruned: s.pruned.0,
-                        upper: upper[p],
-                        lower: lower[p],
-                        made,
-                        e1,
-                        e2,
-                        reduced,
+        let diffs = steps
+            .iter()
+            .map(|s| {
+                let p = s.pruned.0 as usize;
+                let (made, e1, e2, reduced) = match s.reduced {
+                    Some(d) => {
+                        let (e1, e2) = parts[d.0 as usize - m];
+                        (d.0, e1, e2, lower[e1 as usize])
                     }
-                })
-                .collect()
-        };
-        let (chain_start, chain_len, chain) = layout_chains(base, total_arcs, &parts);
+                    None => (NONE, NONE, NONE, NONE),
+                };
+                StepDiff {
+                    pruned: s.pruned.0,
+                    upper: upper[p],
+                    lower: lower[p],
+                    made,
+                    e1,
+                    e2,
+                    reduced,
+                }
+            })
+            .collect();
+        let (chain_start, chain_len, chain) = layout_chains(base, &alive, &parts);
         let mut superarc_base = vec![NONE; base.perturbed_arcs()];
         for a in 0..m {
             let s = chain_start[a] as usize;
@@ -411,98 +393,72 @@ impl Simplification {
     }
 }
 
-/// An arc as the pruning sequence reads it: everything a step touches of
-/// one arc in 32 bytes, so a step costs one cache miss per arc it visits
-/// rather than one per array (the sequence visits arcs in cost order, i.e.
-/// at random: on trees of millions of arcs those misses are its cost).
-#[derive(Clone, Copy, Debug)]
-struct LiveArc {
-    upper: u32,
-    lower: u32,
-    up_cost: f64,
-    down_cost: f64,
-    alive: bool,
-}
-
-/// A node as the pruning sequence reads it: its live arcs up and down,
-/// counted and XORed together (16 bytes, one cache line).
-#[derive(Clone, Copy, Debug, Default)]
-struct LiveNode {
-    n_up: u32,
-    n_down: u32,
-    x_up: u32,
-    x_down: u32,
-}
-
-impl LiveNode {
-    fn degree(&self) -> u32 {
-        self.n_up + self.n_down
-    }
-}
-
 /// The tree as the pruning sequence changes it (paper §3.3): arcs are only
 /// created, never changed; the live adjacency of a node is its number of
 /// live arcs up and down and the XOR of their ids, so a node with one arc
 /// in a direction finds it in O(1).
 struct Pruning {
-    arcs: Vec<LiveArc>,
-    nodes: Vec<LiveNode>,
+    upper: Vec<u32>,
+    lower: Vec<u32>,
+    up_cost: Vec<f64>,
+    down_cost: Vec<f64>,
+    n_up: Vec<u32>,
+    n_down: Vec<u32>,
+    x_up: Vec<u32>,
+    x_down: Vec<u32>,
+    alive: Vec<bool>,
     /// Per arc made by reduction: (e1, e2), the arcs above and below.
     parts: Vec<(u32, u32)>,
 }
 
 impl Pruning {
     fn new(base: &CollapsedTree, measure: Measure, node_value: &[f64]) -> Self {
-        use rayon::prelude::*;
         let m = base.num_arcs();
         let n = base.num_nodes();
-        // Reductions make at most one arc per arc pruned.
-        let mut arcs = Vec::with_capacity(2 * m);
-        (0..m as u32)
-            .into_par_iter()
-            .map(|a| {
-                let (u, l) = base.arc(a);
-                LiveArc {
-                    upper: u,
-                    lower: l,
-                    up_cost: measure.up_cost(base.below(a), node_value[u as usize]),
-                    down_cost: measure.down_cost(base.above(a), node_value[l as usize]),
-                    alive: true,
-                }
-            })
-            .collect_into_vec(&mut arcs);
-        arcs.reserve(m);
-        let mut nodes = vec![LiveNode::default(); n];
-        for (a, arc) in arcs.iter().enumerate() {
-            let lo = &mut nodes[arc.lower as usize];
-            lo.n_up += 1;
-            lo.x_up ^= a as u32;
-            let hi = &mut nodes[arc.upper as usize];
-            hi.n_down += 1;
-            hi.x_down ^= a as u32;
-        }
-        Self {
-            arcs,
-            nodes,
+        let cap = 2 * m;
+        let mut t = Self {
+            upper: Vec::with_capacity(cap),
+            lower: Vec::with_capacity(cap),
+            up_cost: Vec::with_capacity(cap),
+            down_cost: Vec::with_capacity(cap),
+            n_up: vec![0; n],
+            n_down: vec![0; n],
+            x_up: vec![0; n],
+            x_down: vec![0; n],
+            alive: vec![true; m],
             parts: Vec::new(),
+        };
+        for a in 0..m as u32 {
+            let (u, l) = base.arc(a);
+            t.upper.push(u);
+            t.lower.push(l);
+            t.up_cost
+                .push(measure.up_cost(base.below(a), node_value[u as usize]));
+            t.down_cost
+                .push(measure.down_cost(base.above(a), node_value[l as usize]));
+            t.n_up[l as usize] += 1;
+            t.x_up[l as usize] ^= a;
+            t.n_down[u as usize] += 1;
+            t.x_down[u as usize] ^= a;
         }
+        t
     }
 
     fn degree(&self, v: u32) -> u32 {
-        self.nodes[v as usize].degree()
+        self.n_up[v as usize] + self.n_down[v as usize]
     }
 
     /// The queue entry of arc `a` if it is a leaf: a lower leaf costs
     /// up(a), an upper leaf down(a) (rule 2).
     fn leaf_entry(&self, a: u32) -> Option<Entry> {
-        let arc = &self.arcs[a as usize];
-        match (self.degree(arc.lower) == 1, self.degree(arc.upper) == 1) {
+        let (lo, hi) = (self.lower[a as usize], self.upper[a as usize]);
+        match (self.degree(lo) == 1, self.degree(hi) == 1) {
             (true, false) => Some(Entry {
-                cost: arc.up_cost,
+                cost: self.up_cost[a as usize],
                 arc: a,
             }),
             (false, true) => Some(Entry {
-                cost: arc.down_cost,
+                cost: self.down_cost[a as usize],
                 arc: a,
             }),
             _ => None,
@@ -514,62 +470,56 @@ impl Pruning {
     /// down (up) of the node it hangs from (rule 3). Returns that node and
     /// whether `a` is a lower leaf.
     fn prunable(&self, a: u32) -> Option<(u32, bool)> {
-        let arc = &self.arcs[a as usize];
-        if !arc.alive {
+        if !self.alive[a as usize] {
             return None;
         }
-        let (hi, lo) = (
-            &self.nodes[arc.upper as usize],
-            &self.nodes[arc.lower as usize],
-        );
-        let lower_leaf = lo.degree() == 1;
-        let upper_leaf = hi.degree() == 1;
+        let (hi, lo) = (self.upper[a as usize], self.lower[a as usize]);
+        let lower_leaf = self.degree(lo) == 1;
+        let upper_leaf = self.degree(hi) == 1;
         if lower_leaf == upper_leaf {
             return None;
         }
-        if (lower_leaf && hi.n_down == 1) || (upper_leaf && lo.n_up == 1) {
+        let s = if lower_leaf { hi } else { lo };
+        if (lower_leaf && self.n_down[s as usize] == 1)
+            || (upper_leaf && self.n_up[s as usize] == 1)
+        {
             return None;
         }
-        let s = if lower_leaf { arc.upper } else { arc.lower };
         Some((s, lower_leaf))
     }
 
     /// Leaf pruning: arc `a` leaves the tree with its leaf node.
     fn leaf_prune(&mut self, a: u32) {
-        let arc = &mut self.arcs[a as usize];
-        arc.alive = false;
-        let (hi, lo) = (arc.upper, arc.lower);
-        let lo = &mut self.nodes[lo as usize];
-        lo.n_up -= 1;
-        lo.x_up ^= a;
-        let hi = &mut self.nodes[hi as usize];
-        hi.n_down -= 1;
-        hi.x_down ^= a;
+        let (hi, lo) = (self.upper[a as usize], self.lower[a as usize]);
+        self.alive[a as usize] = false;
+        self.n_up[lo as usize] -= 1;
+        self.x_up[lo as usize] ^= a;
+        self.n_down[hi as usize] -= 1;
+        self.x_down[hi as usize] ^= a;
     }
 
     /// Vertex reduction of node `s`, left with one arc `e1` up and one
     /// `e2` down: they become one new arc `d` with up(d) = up(e1) and
     /// down(d) = down(e2). Returns `d`.
     fn vertex_reduction(&mut self, s: u32) -> u32 {
-        let node = std::mem::take(&mut self.nodes[s as usize]);
-        let (e1, e2) = (node.x_up, node.x_down);
-        let d = self.arcs.len() as u32;
-        let a1 = &mut self.arcs[e1 as usize];
-        a1.alive = false;
-        let (u, up_cost) = (a1.upper, a1.up_cost);
-        let a2 = &mut self.arcs[e2 as usize];
-        a2.alive = false;
-        let (l, down_cost) = (a2.lower, a2.down_cost);
-        self.arcs.push(LiveArc {
-            upper: u,
-            lower: l,
-            up_cost,
-            down_cost,
-            alive: true,
-        });
+        let si = s as usize;
+        let (e1, e2) = (self.x_up[si], self.x_down[si]);
+        let d = self.upper.len() as u32;
+        let (u, l) = (self.upper[e1 as usize], self.lower[e2 as usize]);
+        self.upper.push(u);
+        self.lower.push(l);
+        self.up_cost.push(self.up_cost[e1 as usize]);
+        self.down_cost.push(self.down_cost[e2 as usize]);
         self.parts.push((e1, e2));
-        self.nodes[u as usize].x_down ^= e1 ^ d;
-        self.nodes[l as usize].x_up ^= e2 ^ d;
+        self.alive[e1 as usize] = false;
+        self.alive[e2 as usize] = false;
+        self.alive.push(true);
+        self.n_up[si] = 0;
+        self.n_down[si] = 0;
+        self.x_up[si] = 0;
+        self.x_down[si] = 0;
+        self.x_down[u as usize] ^= e1 ^ d;
+        self.x_up[l as usize] ^= e2 ^ d;
         d
     }
 }
@@ -623,10 +573,11 @@ impl Extend<Entry> for PruningQueue {
 /// contiguous ascending range (see the module documentation).
 fn layout_chains(
     base: &CollapsedTree,
-    total: usize,
+    alive: &[bool],
     parts: &[(u32, u32)],
 ) -> (Vec<u32>, Vec<u32>, Vec<ArcId>) {
     let m = base.num_arcs();
+    let total = alive.len();
     let mut len = vec![0u32; total];
     for (a, l) in len.iter_mut().enumerate().take(m) {
         *l = base.chain(a as u32).len() as u32;
@@ -1015,8 +966,7 @@ mod tests {
                 &mut heap, &n_up, &n_down, a, &upper, &lower, &up_cost, &down_cost,
             );
         }
-        // Every step prunes an arc for good: fewer steps than arcs.
-        let mut steps = Vec::with_capacity(m);
+        let mut steps = Vec::new();
         while let Some(Entry { cost, arc: a }) = heap.pop() {
             if !alive[a as usize] {
                 continue; // lazy deletion: reduced away since queued
