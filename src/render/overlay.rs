@@ -119,8 +119,8 @@ pub fn draw_segment(
 fn blend(img: &mut image::RgbaImage, x: u32, y: u32, colour: [u8; 3], a: u8) {
     let p = img.get_pixel_mut(x, y);
     let a = u16::from(a);
-    for k in 0..3 {
-        p.0[k] = ((u16::from(colour[k]) * a + u16::from(p.0[k]) * (255 - a) + 127) / 255) as u8;
+    for (c, v) in colour.iter().zip(&mut p.0) {
+        *v = ((u16::from(*c) * a + u16::from(*v) * (255 - a) + 127) / 255) as u8;
     }
 }
 

@@ -163,7 +163,7 @@ pub fn important_branches(
         })
         .collect();
     // Pruned later first (the step orders by cost, ties included).
-    out.sort_by(|x, y| y.branch.cmp(&x.branch));
+    out.sort_by_key(|x| std::cmp::Reverse(x.branch));
     out.truncate(max);
     out
 }

@@ -27,6 +27,9 @@ use crate::field::slice::{Slice, slice_axes};
 use crate::render::overlay::{Section, slice_image};
 use crate::render::{ClipPlane, SliceQuad};
 
+/// A cross-section: line segments in the slice's plane.
+type Segments = Vec<[[f32; 2]; 2]>;
+
 /// The axes' names.
 pub const AXES: [&str; 3] = ["x", "y", "z"];
 
@@ -97,7 +100,7 @@ pub struct SlicePanel {
     pub open: bool,
     field: Option<Arc<ScalarField>>,
     grey: HashMap<(usize, usize), Arc<Slice>>,
-    sections: HashMap<(u64, u64, usize, usize), Arc<Vec<[[f32; 2]; 2]>>>,
+    sections: HashMap<(u64, u64, usize, usize), Arc<Segments>>,
     built: [Option<Built>; 3],
     next_version: u64,
     /// Milliseconds the last rebuild of the images took.
@@ -172,6 +175,7 @@ impl SlicePanel {
         let mut rebuilt = false;
         let dims = field.dims();
         let spacing = field.spacing();
+        #[allow(clippy::needless_range_loop)] // axis indexes four arrays
         for axis in 0..3 {
             if !self.slices.on[axis] {
                 self.built[axis] = None;
@@ -195,7 +199,7 @@ impl SlicePanel {
                     .or_insert_with(|| Arc::new(Slice::of(&field, axis, index))),
             );
             let at = grey.position(spacing);
-            let segments: Vec<(Arc<Vec<[[f32; 2]; 2]>>, [u8; 3])> = sources
+            let segments: Vec<(Arc<Segments>, [u8; 3])> = sources
                 .iter()
                 .map(|s| {
                     let segs = self
