@@ -250,16 +250,9 @@ fn render_session_draws_the_legend_the_slices_and_the_clip() {
         return;
     }
     let mut h = synthetic_explorer();
-    let app = h.state();
-    let level = app.level().expect("level");
-    let sim = level.simplification();
-    let mut arcs: Vec<_> = level
-        .arcs()
-        .map(|a| (a.id, sim.node_value(a.upper) - sim.node_value(a.lower)))
-        .collect();
-    arcs.sort_by(|x, y| y.1.total_cmp(&x.1));
-    h.state_mut().select_arc(arcs[0].0, true);
-    h.state_mut().select_arc(arcs[1].0, false);
+    let arcs = common::harness::arcs_by_length(&h);
+    h.state_mut().select_arc(arcs[0], true);
+    h.state_mut().select_arc(arcs[1], false);
     settle(&mut h);
     {
         let sel = h.state_mut().selection_mut();

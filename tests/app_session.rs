@@ -33,15 +33,8 @@ fn settle(h: &mut Harness<'_, FlexisoApp>) {
 /// Two contours on the two longest arcs, coloured, named, one hidden; a
 /// level and a camera of their own.
 fn compose(h: &mut Harness<'_, FlexisoApp>) {
-    let app = h.state();
-    let level = app.level().expect("level");
-    let sim = level.simplification();
-    let mut arcs: Vec<_> = level
-        .arcs()
-        .map(|a| (a.id, sim.node_value(a.upper) - sim.node_value(a.lower)))
-        .collect();
-    arcs.sort_by(|x, y| y.1.total_cmp(&x.1));
-    let (a, b) = (arcs[0].0, arcs[1].0);
+    let arcs = common::harness::arcs_by_length(h);
+    let (a, b) = (arcs[0], arcs[1]);
     h.state_mut().select_arc(a, true);
     h.state_mut().select_arc(b, false);
     settle(h);

@@ -62,6 +62,18 @@ pub fn tallest_arc(h: &Harness<'_, FlexisoApp>) -> (SimplifiedArcId, Pos2) {
         .expect("the tree panel drew arcs")
 }
 
+/// The shown arcs, longest in value first.
+pub fn arcs_by_length(h: &Harness<'_, FlexisoApp>) -> Vec<SimplifiedArcId> {
+    let level = h.state().level().expect("level");
+    let sim = level.simplification();
+    let mut arcs: Vec<_> = level
+        .arcs()
+        .map(|a| (a.id, sim.node_value(a.upper) - sim.node_value(a.lower)))
+        .collect();
+    arcs.sort_by(|x, y| y.1.total_cmp(&x.1));
+    arcs.into_iter().map(|(a, _)| a).collect()
+}
+
 /// The explorer on `synthetic:24` (a volume a session can name), in a
 /// 1200×800 window, its pipeline already run.
 pub fn synthetic_explorer() -> Harness<'static, FlexisoApp> {
