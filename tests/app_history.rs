@@ -335,3 +335,33 @@ fn the_colour_picker_sets_a_swatch_or_a_typed_code_each_undone_and_escape_only_c
     undo(&mut h);
     assert_eq!(h.state().selection().contours[0].colour, before, "undone");
 }
+
+#[test]
+fn isolating_unticks_the_other_rows_and_undoes_as_one_step() {
+    let mut h = explorer();
+    let arcs = common::harness::arcs_by_length(&h);
+    h.state_mut().select_arc(arcs[0], true);
+    h.state_mut().select_arc(arcs[1], false);
+    settle(&mut h);
+    assert_eq!(h.state().selection().contours.len(), 2);
+    let visible = |h: &Harness<'_, FlexisoApp>| -> Vec<bool> {
+        h.state()
+            .selection()
+            .contours
+            .iter()
+            .map(|c| c.visible)
+            .collect()
+    };
+    // The first row's "isolate": the other row's visible box unticked.
+    h.get_all_by_label("isolate")
+        .next()
+        .expect("an isolate button")
+        .click();
+    settle(&mut h);
+    // (The rows' visible boxes show these values.)
+    assert_eq!(visible(&h), [true, false]);
+    assert!(h.state().selection().isolated.is_some());
+    undo(&mut h);
+    assert_eq!(visible(&h), [true, true], "undone in one step");
+    assert_eq!(h.state().selection().isolated, None);
+}

@@ -275,6 +275,22 @@ pub fn project_to_image(
     ])
 }
 
+/// How far up a box `[x0, y0, x1, y1]` must move to overlap none of
+/// `placed` (with `gap` between), trying above each in turn.
+pub fn clear_of(placed: &[[f32; 4]], b: [f32; 4], gap: f32) -> f32 {
+    let mut lift = 0.0;
+    for _ in 0..=placed.len() {
+        let hit = placed.iter().find(|p| {
+            b[0] < p[2] && p[0] < b[2] && b[1] - lift < p[3] + gap && p[1] - gap < b[3] - lift
+        });
+        match hit {
+            Some(p) => lift = b[3] - p[1] + gap,
+            None => break,
+        }
+    }
+    lift
+}
+
 /// Draws each label as the 3D view does: a dot in the contour's colour
 /// at its point, a leader line to a dark box up and to the right holding
 /// the name in white, the box bordered in the colour.
@@ -287,6 +303,7 @@ pub fn draw_labels(img: &mut image::RgbaImage, labels: &[ImageLabel]) {
     let texts = Texts::new(labels.iter().map(|l| l.text.as_str()), size);
     let pad = (0.25 * size).round().max(2.0);
     let off = (0.6 * size).round();
+    let mut placed: Vec<[f32; 4]> = Vec::new();
     for (i, l) in labels.iter().enumerate() {
         let [px, py] = l.at;
         if !(px.is_finite() && py.is_finite()) {
@@ -295,6 +312,11 @@ pub fn draw_labels(img: &mut image::RgbaImage, labels: &[ImageLabel]) {
         let [tw, th] = texts.size(i);
         let (tx, ty) = (px + off, py - off - th);
         let (bx0, by0, bx1, by1) = (tx - pad, ty - pad, tx + tw + pad, ty + th + pad);
+        // Labels of nearby points would cover each other: one moves up
+        // above the other, its leader line longer.
+        let lift = clear_of(&placed, [bx0, by0, bx1, by1], 2.0 * pad);
+        let (ty, by0, by1) = (ty - lift, by0 - lift, by1 - lift);
+        placed.push([bx0, by0, bx1, by1]);
         draw_segment(img, [px, py], [bx0, by1], l.colour, (size / 12.0).max(1.0));
         fill(img, bx0, by0, bx1, by1, [0, 0, 0], 170);
         let b = (size / 12.0).max(1.0);

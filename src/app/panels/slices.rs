@@ -384,76 +384,87 @@ impl SlicePanel {
         };
         let dims = field.dims();
         ui.horizontal_top(|ui| {
+            // The controls scroll when the panel is low; the images take
+            // the rest of the width.
             ui.vertical(|ui| {
                 ui.set_width(250.0);
-                ui.label(RichText::new("Slices").strong());
-                for a in 0..3 {
-                    ui.horizontal(|ui| {
-                        ui.checkbox(&mut self.slices.on[a], AXES[a]);
-                        let max = dims[a].saturating_sub(1);
-                        ui.add_enabled(
-                            self.slices.on[a],
-                            egui::Slider::new(&mut self.slices.index[a], 0..=max)
-                                .text(format!("{} slice", AXES[a])),
-                        );
-                    });
-                }
-                ui.separator();
-                ui.label(RichText::new("Clipping plane").strong());
-                ui.horizontal(|ui| {
-                    ui.checkbox(&mut self.clip.on, "cut");
-                    egui::ComboBox::from_id_salt("clip axis")
-                        .width(44.0)
-                        .selected_text(AXES[self.clip.axis.min(2)])
-                        .show_ui(ui, |ui| {
-                            for (a, name) in AXES.iter().enumerate() {
-                                ui.selectable_value(&mut self.clip.axis, a, *name);
-                            }
+                egui::ScrollArea::vertical()
+                    .id_salt("slice controls")
+                    .show(ui, |ui| {
+                        ui.label(RichText::new("Slices").strong());
+                        for a in 0..3 {
+                            ui.horizontal(|ui| {
+                                ui.checkbox(&mut self.slices.on[a], AXES[a]);
+                                let max = dims[a].saturating_sub(1);
+                                ui.add_enabled(
+                                    self.slices.on[a],
+                                    egui::Slider::new(&mut self.slices.index[a], 0..=max)
+                                        .text(format!("{} slice", AXES[a])),
+                                );
+                            });
+                        }
+                        ui.separator();
+                        ui.label(RichText::new("Clipping plane").strong());
+                        ui.horizontal(|ui| {
+                            ui.checkbox(&mut self.clip.on, "cut");
+                            egui::ComboBox::from_id_salt("clip axis")
+                                .width(44.0)
+                                .selected_text(AXES[self.clip.axis.min(2)])
+                                .show_ui(ui, |ui| {
+                                    for (a, name) in AXES.iter().enumerate() {
+                                        ui.selectable_value(&mut self.clip.axis, a, *name);
+                                    }
+                                });
+                            ui.selectable_value(&mut self.clip.keep_below, true, "keep below");
+                            ui.selectable_value(&mut self.clip.keep_below, false, "keep above");
                         });
-                    ui.selectable_value(&mut self.clip.keep_below, true, "keep below");
-                    ui.selectable_value(&mut self.clip.keep_below, false, "keep above");
-                });
-                ui.add_enabled(
-                    self.clip.on,
-                    egui::Slider::new(&mut self.clip.at, 0.0..=1.0)
-                        .text("clip at")
-                        .fixed_decimals(2),
-                );
-            });
-            ui.separator();
-            ui.vertical(|ui| {
-                ui.set_width(270.0);
-                ui.spacing_mut().slider_width = 70.0;
-                ui.checkbox(&mut self.cut_box.on, RichText::new("Cut-away box").strong())
-                    .on_hover_text("Cut away what lies inside a box from every contour");
-                for a in 0..3 {
-                    ui.horizontal(|ui| {
                         ui.add_enabled(
-                            self.cut_box.on,
-                            egui::Slider::new(&mut self.cut_box.lo[a], 0.0..=1.0)
-                                .text(format!("{} from", AXES[a]))
+                            self.clip.on,
+                            egui::Slider::new(&mut self.clip.at, 0.0..=1.0)
+                                .text("clip at")
                                 .fixed_decimals(2),
                         );
-                        ui.add_enabled(
-                            self.cut_box.on,
-                            egui::Slider::new(&mut self.cut_box.hi[a], 0.0..=1.0)
-                                .text(format!("{} to", AXES[a]))
-                                .fixed_decimals(2),
-                        );
+                        ui.separator();
+                        ui.checkbox(&mut self.cut_box.on, RichText::new("Cut-away box").strong())
+                            .on_hover_text(
+                                "Cut away what lies inside a box from every contour \
+                         (its extent as fractions of the volume's box)",
+                            );
+                        for a in 0..3 {
+                            ui.add_enabled_ui(self.cut_box.on, |ui| {
+                                ui.horizontal(|ui| {
+                                    let l = ui.label(format!("{} from", AXES[a]));
+                                    ui.add(
+                                        egui::DragValue::new(&mut self.cut_box.lo[a])
+                                            .range(0.0..=1.0)
+                                            .speed(0.005)
+                                            .fixed_decimals(2),
+                                    )
+                                    .labelled_by(l.id);
+                                    let l = ui.label("to");
+                                    ui.add(
+                                        egui::DragValue::new(&mut self.cut_box.hi[a])
+                                            .range(0.0..=1.0)
+                                            .speed(0.005)
+                                            .fixed_decimals(2),
+                                    )
+                                    .labelled_by(l.id);
+                                });
+                            });
+                        }
+                        if self.rebuilding() {
+                            ui.label(RichText::new("updating the slices…").weak().small());
+                        } else if self.built.iter().any(Option::is_some) {
+                            ui.label(
+                                RichText::new(format!(
+                                    "built in {:.0} ms (cross-sections of {} triangles: {:.0} ms)",
+                                    self.build_ms, self.section_triangles, self.section_ms
+                                ))
+                                .weak()
+                                .small(),
+                            );
+                        }
                     });
-                }
-                if self.rebuilding() {
-                    ui.label(RichText::new("updating the slices…").weak().small());
-                } else if self.built.iter().any(Option::is_some) {
-                    ui.label(
-                        RichText::new(format!(
-                            "built in {:.0} ms (cross-sections of {} triangles: {:.0} ms)",
-                            self.build_ms, self.section_triangles, self.section_ms
-                        ))
-                        .weak()
-                        .small(),
-                    );
-                }
             });
             ui.separator();
             let shown: Vec<usize> = (0..3).filter(|&a| self.built[a].is_some()).collect();

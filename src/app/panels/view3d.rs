@@ -218,6 +218,7 @@ impl View3d {
         let painter = ui.painter_at(rect);
         let aspect = rect.width() / rect.height().max(1.0);
         let vp = self.camera.view_proj(aspect);
+        let mut placed: Vec<[f32; 4]> = Vec::new();
         for l in &self.context.labels {
             if !self.context.keeps(l.anchor) {
                 continue;
@@ -235,6 +236,17 @@ impl View3d {
             let galley = painter.layout_no_wrap(l.text.clone(), font, Color32::WHITE);
             let at = p + egui::vec2(8.0, -8.0 - galley.size().y);
             let bg = egui::Rect::from_min_size(at, galley.size()).expand(3.0);
+            // Nearby labels would cover each other: one moves up.
+            let lift = crate::render::overlay::clear_of(
+                &placed,
+                [bg.min.x, bg.min.y, bg.max.x, bg.max.y],
+                3.0,
+            );
+            let (at, bg) = (
+                at - egui::vec2(0.0, lift),
+                bg.translate(egui::vec2(0.0, -lift)),
+            );
+            placed.push([bg.min.x, bg.min.y, bg.max.x, bg.max.y]);
             painter.line_segment([p, bg.left_bottom()], egui::Stroke::new(1.0, l.colour));
             painter.circle_filled(p, 3.0, l.colour);
             painter.rect_filled(bg, 3.0, Color32::from_black_alpha(170));
