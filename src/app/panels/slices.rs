@@ -430,10 +430,10 @@ impl SlicePanel {
                                 "Cut away what lies inside a box from every contour \
                          (its extent as fractions of the volume's box)",
                             );
-                        for a in 0..3 {
+                        for (a, name) in AXES.iter().enumerate() {
                             ui.add_enabled_ui(self.cut_box.on, |ui| {
                                 ui.horizontal(|ui| {
-                                    let l = ui.label(format!("{} from", AXES[a]));
+                                    let l = ui.label(format!("{name} from"));
                                     ui.add(
                                         egui::DragValue::new(&mut self.cut_box.lo[a])
                                             .range(0.0..=1.0)
@@ -535,6 +535,10 @@ impl SlicePanel {
 /// grid index).
 type SectionKey = (u64, u64, usize, usize);
 
+/// A contour on a slice: its cache key, mesh, colour, and its
+/// cross-section when cached.
+type ToCut = (SectionKey, Arc<ContourMesh>, [u8; 3], Option<Arc<Segments>>);
+
 /// What a slice's job is given: the slice, and each contour shown on it
 /// with its cross-section when cached.
 struct Request {
@@ -543,7 +547,7 @@ struct Request {
     key: u64,
     field: Arc<ScalarField>,
     grey: Option<Arc<Slice>>,
-    sources: Vec<(SectionKey, Arc<ContourMesh>, [u8; 3], Option<Arc<Segments>>)>,
+    sources: Vec<ToCut>,
 }
 
 /// A slice's rebuilt image, with what the job read and cut for it (for
