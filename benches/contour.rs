@@ -4,7 +4,9 @@
 //! isosurface at one value (every contour: one parallel sweep; following
 //! every seed for comparison). Run on the two MRI templates of the shared
 //! data folder, on the largest contour among a few isovalues, or on a
-//! synthetic cube without them.
+//! synthetic cube without them. The quick printout also times the largest
+//! contour's cross-sections on the middle slices (what the explorer's
+//! slice panel cuts in its job when a slice moves).
 //!
 //! `cargo bench --bench contour` (set `FLEXISO_BENCH_VOLUMES=colin27_ch2`
 //! to bench only some of them). Before criterion's statistics it prints
