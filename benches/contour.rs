@@ -4,7 +4,9 @@
 //! isosurface at one value (every contour: one parallel sweep; following
 //! every seed for comparison). Run on the two MRI templates of the shared
 //! data folder, on the largest contour among a few isovalues, or on a
-//! synthetic cube without them.
+//! synthetic cube without them. The quick printout also times the largest
+//! contour's cross-sections on the middle slices (what the explorer's
+//! slice panel cuts in its job when a slice moves).
 //!
 //! `cargo bench --bench contour` (set `FLEXISO_BENCH_VOLUMES=colin27_ch2`
 //! to bench only some of them). Before criterion's statistics it prints
@@ -141,6 +143,7 @@ fn quick() {
                 cpu = cpu.min((b - a) as f64 * 1e-9);
             }
         });
+        section_times(&name, &field, &seed, iso);
         let t_all = best_of(7, || {
             black_box(all_contours(&tree, &field, iso));
         });
@@ -167,6 +170,38 @@ fn quick() {
         drag_latency(&name, &tree, &field, 150_000..=250_000);
         drag_latency(&name, &tree, &field, 500_000..=1_000_000);
     }
+}
+
+/// The largest contour's cross-sections on the middle slice of each axis
+/// (what the explorer's slice panel cuts when a slice moves): best of 5,
+/// on every core (`axis_section` goes parallel for big meshes).
+fn section_times(name: &str, field: &ScalarField, seed: &PathSeed, iso: Isovalue) {
+    let mesh = ContourFollower::new(field).follow(seed, iso);
+    let dims = field.dims();
+    let spacing = field.spacing();
+    let ms: Vec<f64> = (0..3)
+        .map(|a| {
+            let at = ((dims[a] / 2) as f64 * spacing[a]) as f32;
+            1e3 * best_of(5, || {
+                black_box(flexiso::contour::section::axis_section(
+                    &mesh.positions,
+                    &mesh.indices,
+                    a,
+                    at,
+                ));
+            })
+        })
+        .collect();
+    println!(
+        "{name} h = {}: cross-sections of the largest contour ({} triangles) on the middle \
+         slices: x {:.1} ms, y {:.1} ms, z {:.1} ms ({} threads)",
+        iso.value,
+        mesh.indices.len() / 3,
+        ms[0],
+        ms[1],
+        ms[2],
+        rayon::current_num_threads()
+    );
 }
 
 /// CPU seconds of the whole process so far (every thread), if known: on a

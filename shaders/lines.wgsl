@@ -10,6 +10,8 @@ struct Frame {
     // are cut away (mesh.wgsl) when clip_on.x is 1.
     clip: vec4<f32>,
     clip_on: vec4<f32>,
+    cut_lo: vec4<f32>,
+    cut_hi: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

@@ -16,6 +16,10 @@ struct Frame {
     // are cut away (mesh.wgsl) when clip_on.x is 1.
     clip: vec4<f32>,
     clip_on: vec4<f32>,
+    // The cut-away box: fragments inside [cut_lo.xyz, cut_hi.xyz] are
+    // cut away when cut_lo.w is 1.
+    cut_lo: vec4<f32>,
+    cut_hi: vec4<f32>,
 };
 
 struct Style {
@@ -76,6 +80,9 @@ fn srgb_from_linear(c: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     if frame.clip_on.x > 0.5 && dot(frame.clip.xyz, in.world) > frame.clip.w {
+        discard;
+    }
+    if frame.cut_lo.w > 0.5 && all(in.world >= frame.cut_lo.xyz) && all(in.world <= frame.cut_hi.xyz) {
         discard;
     }
     let v = normalize(frame.eye.xyz - in.world);

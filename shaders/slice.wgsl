@@ -9,6 +9,8 @@ struct Frame {
     line_colour: vec4<f32>,
     clip: vec4<f32>,
     clip_on: vec4<f32>,
+    cut_lo: vec4<f32>,
+    cut_hi: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

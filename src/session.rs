@@ -11,14 +11,17 @@
 //!                "color": "#e6194b", "name": "brain", "visible": true}],
 //!  "slices": {"x": 90, "z": 60},
 //!  "clip": {"axis": "y", "at": 0.5, "keep": "above"},
+//!  "cut_box": {"min": [0.5, 0.0, 0.5], "max": [1.0, 0.5, 1.0]},
 //!  "view": {"labels": true, "legend": true, "triad": true, "slices_panel": true}}
 //! ```
 //!
-//! `slices`, `clip` and `view` are optional (version 1 files without them
-//! open as before): `slices` holds the grid index of each slice shown
-//! (an axis left out shows none), `clip` the clipping plane across one
-//! axis at a fraction `at` of the volume's box, keeping what lies
-//! `below` or `above` it, and `view` the 3D view's switches.
+//! `slices`, `clip`, `cut_box` and `view` are optional (version 1 files
+//! without them open as before): `slices` holds the grid index of each
+//! slice shown (an axis left out shows none), `clip` the clipping plane
+//! across one axis at a fraction `at` of the volume's box, keeping what
+//! lies `below` or `above` it, `cut_box` a box cut away from every
+//! contour, its corners as fractions of the volume's box, and `view` the
+//! 3D view's switches.
 //!
 //! A contour is named as in the selection (see `app::selection`): by the
 //! original superarc it lies on, spelt as the vertex ids of its upper and
@@ -148,9 +151,50 @@ pub struct Session {
     /// The clipping plane (none: no cut).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clip: Option<SessionClip>,
+    /// The cut-away box (none: no box).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cut_box: Option<SessionCutBox>,
     /// The 3D view's switches (none: their defaults).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub view: Option<SessionView>,
+}
+
+/// An axis-aligned box cut away from every contour, its corners as
+/// fractions of the volume's box along x, y and z (0..=1).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SessionCutBox {
+    /// The low corner.
+    pub min: [f32; 3],
+    /// The high corner.
+    pub max: [f32; 3],
+}
+
+impl Default for SessionCutBox {
+    fn default() -> Self {
+        SessionCutBox {
+            min: [0.5; 3],
+            max: [1.0; 3],
+        }
+    }
+}
+
+impl SessionCutBox {
+    /// The box in world coordinates for a volume box `lo..hi`: fractions
+    /// clamped to 0..=1 (not a number: the default's), corners sorted.
+    pub fn world(&self, lo: [f32; 3], hi: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+        let d = SessionCutBox::default();
+        let f = |v: f32, dv: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { dv };
+        let mut a = [0.0; 3];
+        let mut b = [0.0; 3];
+        for i in 0..3 {
+            let (p, q) = (f(self.min[i], d.min[i]), f(self.max[i], d.max[i]));
+            let (p, q) = (p.min(q), p.max(q));
+            a[i] = lo[i] + p * (hi[i] - lo[i]);
+            b[i] = lo[i] + q * (hi[i] - lo[i]);
+        }
+        (a, b)
+    }
 }
 
 /// The grid index of each slice shown; an axis left out shows none.
@@ -252,6 +296,7 @@ impl Default for Session {
             contours: Vec::new(),
             slices: None,
             clip: None,
+            cut_box: None,
             view: None,
         }
     }
@@ -502,6 +547,7 @@ mod tests {
         assert!(s.contours[0].visible);
         assert_eq!(s.contours[0].name, "");
         assert_eq!((s.slices, s.clip, s.view), (None, None, None));
+        assert_eq!(s.cut_box, None);
     }
 
     #[test]
@@ -513,6 +559,10 @@ mod tests {
                 axis: "x".into(),
                 at: 0.25,
                 keep: "below".into(),
+            }),
+            cut_box: Some(SessionCutBox {
+                min: [0.0, 0.25, 0.5],
+                max: [0.5, 1.0, 1.0],
             }),
             view: Some(SessionView {
                 labels: true,

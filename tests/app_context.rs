@@ -136,6 +136,31 @@ fn picking_goes_through_what_the_clipping_plane_cuts_away() {
 }
 
 #[test]
+fn picking_goes_through_what_the_cut_away_box_cuts_away() {
+    let Some(_) = common::gpu() else { return };
+    let mut h = explorer(true);
+    both_spheres_from_plus_x(&mut h);
+    // Cut away the box x > 16 (the near bump), every y and z.
+    let cut = &mut h.state_mut().slices_mut().cut_box;
+    cut.on = true;
+    cut.lo = [0.5, 0.0, 0.0];
+    cut.hi = [1.0, 1.0, 1.0];
+    h.run_steps(2);
+    assert!(
+        h.state()
+            .view3d()
+            .renderer()
+            .expect("a renderer")
+            .cut_box()
+            .is_some(),
+        "the 3D view cuts"
+    );
+    let centre = view_centre(&h);
+    click(&mut h, centre);
+    assert!(selected_x(&h) < 16.0, "the far bump, through the box");
+}
+
+#[test]
 fn a_slice_shows_each_contours_cross_section_in_its_colour() {
     let gpu = common::gpu().is_some();
     let mut h = explorer(gpu);
@@ -168,7 +193,7 @@ fn a_slice_shows_each_contours_cross_section_in_its_colour() {
     let s = &mut h.state_mut().slices_mut().slices;
     s.on = [false, false, true];
     s.index[2] = 16;
-    h.run_steps(3);
+    settle(&mut h);
     let img = h.state().slices().image(2).expect("the z slice is shown");
     let coloured = img
         .pixels()
@@ -186,7 +211,7 @@ fn a_slice_shows_each_contours_cross_section_in_its_colour() {
     assert!(grey > coloured, "mostly grey values");
     // Hidden, its cross-section goes.
     h.state_mut().selection_mut().contours[0].visible = false;
-    h.run_steps(3);
+    settle(&mut h);
     let img = h.state().slices().image(2).expect("still shown");
     assert!(
         !img.pixels()
@@ -211,6 +236,9 @@ fn slices_clip_and_view_switches_are_saved_in_the_session() {
         p.clip.axis = 2;
         p.clip.at = 0.25;
         p.clip.keep_below = false;
+        p.cut_box.on = true;
+        p.cut_box.lo = [0.0, 0.25, 0.5];
+        p.cut_box.hi = [0.5, 1.0, 1.0];
         app.view_options_mut().labels = true;
     }
     h.run_steps(2);
@@ -226,6 +254,8 @@ fn slices_clip_and_view_switches_are_saved_in_the_session() {
         ("z", 0.25, "above")
     );
     assert!(s.view.expect("view saved").labels);
+    let cut = s.cut_box.expect("cut-away box saved");
+    assert_eq!((cut.min, cut.max), ([0.0, 0.25, 0.5], [0.5, 1.0, 1.0]));
 
     // Applied to a fresh explorer on the same volume, they come back.
     let mut g = explorer(false);
@@ -241,7 +271,19 @@ fn slices_clip_and_view_switches_are_saved_in_the_session() {
     assert_eq!(p.slices.on, [true, false, true]);
     assert_eq!((p.slices.index[0], p.slices.index[2]), (5, 20));
     assert!(p.clip.on && p.clip.axis == 2 && !p.clip.keep_below);
+    assert!(p.cut_box.on);
+    assert_eq!((p.cut_box.lo, p.cut_box.hi), (cut.min, cut.max));
+    // In world coordinates: the 32³ grid's box is [0, 31]³.
+    let b = p.cut_box().expect("on");
+    assert_eq!((b.lo, b.hi), ([0.0, 7.75, 15.5], [15.5, 31.0, 31.0]));
     assert!(g.state().view_options().labels);
+    // A session without one: no box.
+    let plain = Session {
+        cut_box: None,
+        ..s.clone()
+    };
+    g.state_mut().apply_session_for_test(&plain);
+    assert!(!g.state().slices().cut_box.on);
 }
 
 #[test]
@@ -316,6 +358,37 @@ fn render_session_draws_the_legend_the_slices_and_the_clip() {
     };
     assert!(light(&with) > light(&without) + 20, "the names' text");
 
+    // Labels on in the session: each contour's name beside it, the dot,
+    // leader and border in its colour, the name in white.
+    let mut s = Session::read(&path).expect("a session");
+    s.view = Some(flexiso::session::SessionView {
+        labels: true,
+        legend: false,
+        ..Default::default()
+    });
+    s.write(&path).expect("written");
+    let labelled = render(&[], &dir.path().join("labelled.png"));
+    let unlabelled = render(&["--no-labels"], &dir.path().join("unlabelled.png"));
+    let exact =
+        |img: &image::RgbaImage, rgb: [u8; 3]| img.pixels().filter(|p| p.0[..3] == rgb).count();
+    for rgb in [[255, 0, 0], [0, 255, 0]] {
+        assert!(
+            exact(&labelled, rgb) >= exact(&unlabelled, rgb) + 20,
+            "a label in {rgb:?}: {} pixels, {} without labels",
+            exact(&labelled, rgb),
+            exact(&unlabelled, rgb)
+        );
+    }
+    let white = |img: &image::RgbaImage| {
+        img.pixels()
+            .filter(|p| p.0[..3].iter().all(|&c| c > 200))
+            .count()
+    };
+    assert!(
+        white(&labelled) >= white(&unlabelled) + 20,
+        "the names' text"
+    );
+
     // A slice across z, the contours clipped away: grey values fill the
     // picture where the contours were.
     // Through the middle of the red contour.
@@ -361,4 +434,49 @@ fn render_session_draws_the_legend_the_slices_and_the_clip() {
         .filter(|p| p.0[0] > 100 && p.0[1] < 60 && p.0[2] < 60)
         .count();
     assert!(contour > 0, "the red contour's cross-section on the slice");
+}
+
+#[test]
+fn a_png_export_carries_the_contours_names_when_labels_are_on() {
+    if common::gpu().is_none() {
+        return;
+    }
+    let mut h = explorer(true);
+    let arcs = common::harness::arcs_by_length(&h);
+    h.state_mut().select_arc(arcs[0], true);
+    settle(&mut h);
+    {
+        let sel = h.state_mut().selection_mut();
+        sel.contours[0].colour = egui::Color32::from_rgb(255, 0, 0);
+        sel.contours[0].name = "brain".into();
+    }
+    h.state_mut().view_options_mut().legend = false;
+    settle(&mut h);
+    let dir = tempfile::tempdir().expect("a temp dir");
+    let mut shot = |labels: bool, name: &str| {
+        h.state_mut().view_options_mut().labels = labels;
+        settle(&mut h);
+        let png = dir.path().join(name);
+        h.state_mut().request_screenshot(png.clone());
+        h.run_steps(2);
+        h.state_mut().wait_for_exports();
+        assert_eq!(h.state().error(), None);
+        image::open(&png).expect("written").to_rgba8()
+    };
+    let with = shot(true, "labels.png");
+    let without = shot(false, "plain.png");
+    let exact =
+        |img: &image::RgbaImage, rgb: [u8; 3]| img.pixels().filter(|p| p.0[..3] == rgb).count();
+    assert!(
+        exact(&with, [255, 0, 0]) >= exact(&without, [255, 0, 0]) + 20,
+        "the label's dot and border: {} red pixels, {} without",
+        exact(&with, [255, 0, 0]),
+        exact(&without, [255, 0, 0])
+    );
+    let white = |img: &image::RgbaImage| {
+        img.pixels()
+            .filter(|p| p.0[..3].iter().all(|&c| c > 200))
+            .count()
+    };
+    assert!(white(&with) >= white(&without) + 20, "the name's text");
 }

@@ -275,3 +275,93 @@ fn opening_another_volume_with_unsaved_changes_asks_first() {
     assert!(!h.state().busy());
     assert_eq!(h.state().selection().contours.len(), 1);
 }
+
+/// The picker's hex field (its text is a colour code).
+fn hex_field<'a>(h: &'a Harness<'_, FlexisoApp>) -> Option<egui_kittest::Node<'a>> {
+    h.query_all_by_role(egui::accesskit::Role::TextInput)
+        .find(|n| n.value().is_some_and(|v| v.starts_with('#')))
+}
+
+#[test]
+fn the_colour_picker_sets_a_swatch_or_a_typed_code_each_undone_and_escape_only_closes_it() {
+    let mut h = explorer();
+    one_contour(&mut h);
+    let before = h.state().selection().contours[0].colour;
+    // A swatch of the palette.
+    let swatch = flexiso::app::selection::palette(3);
+    assert_ne!(before, swatch, "another colour than the contour's");
+    h.get_by_label("colour").click();
+    h.run_steps(2);
+    assert!(
+        h.query_by_label("palette 3").is_some(),
+        "the picker is open"
+    );
+    h.get_by_label("palette 3").click();
+    settle(&mut h);
+    assert_eq!(h.state().selection().contours[0].colour, swatch);
+    // Escape closes the picker, and only that.
+    h.key_press(Key::Escape);
+    settle(&mut h);
+    assert!(h.query_by_label("palette 3").is_none(), "the picker closed");
+    assert_eq!(h.state().selection().contours.len(), 1, "nothing cleared");
+    assert_eq!(h.state().selection().contours[0].colour, swatch, "kept");
+    assert_eq!(h.state().undo_label(), Some("colour of contour 0"));
+    undo(&mut h);
+    assert_eq!(h.state().selection().contours[0].colour, before, "undone");
+
+    // A code typed in the hex field, one key at a time as a person types.
+    h.get_by_label("colour").click();
+    h.run_steps(2);
+    hex_field(&h).expect("the hex field").focus();
+    h.run_steps(1);
+    h.key_press_modifiers(Modifiers::COMMAND, Key::A);
+    h.run_steps(1);
+    for c in "#102030".chars() {
+        hex_field(&h)
+            .expect("the hex field")
+            .type_text(&c.to_string());
+        h.run_steps(1);
+    }
+    h.key_press(Key::Enter);
+    settle(&mut h);
+    assert_eq!(
+        h.state().selection().contours[0].colour,
+        Color32::from_rgb(0x10, 0x20, 0x30)
+    );
+    h.key_press(Key::Escape);
+    settle(&mut h);
+    assert!(hex_field(&h).is_none(), "the picker closed");
+    assert_eq!(h.state().undo_label(), Some("colour of contour 0"));
+    undo(&mut h);
+    assert_eq!(h.state().selection().contours[0].colour, before, "undone");
+}
+
+#[test]
+fn isolating_unticks_the_other_rows_and_undoes_as_one_step() {
+    let mut h = explorer();
+    let arcs = common::harness::arcs_by_length(&h);
+    h.state_mut().select_arc(arcs[0], true);
+    h.state_mut().select_arc(arcs[1], false);
+    settle(&mut h);
+    assert_eq!(h.state().selection().contours.len(), 2);
+    let visible = |h: &Harness<'_, FlexisoApp>| -> Vec<bool> {
+        h.state()
+            .selection()
+            .contours
+            .iter()
+            .map(|c| c.visible)
+            .collect()
+    };
+    // The first row's "isolate": the other row's visible box unticked.
+    h.get_all_by_label("isolate")
+        .next()
+        .expect("an isolate button")
+        .click();
+    settle(&mut h);
+    // (The rows' visible boxes show these values.)
+    assert_eq!(visible(&h), [true, false]);
+    assert!(h.state().selection().isolated.is_some());
+    undo(&mut h);
+    assert_eq!(visible(&h), [true, true], "undone in one step");
+    assert_eq!(h.state().selection().isolated, None);
+}

@@ -248,3 +248,25 @@ fn render_session_draws_each_visible_contour_in_its_colour() {
     assert!(red > 10, "the red contour is drawn: {red} pixels");
     assert!(green > 10, "the green contour is drawn: {green} pixels");
 }
+
+#[test]
+fn an_export_with_the_session_ticked_writes_it_beside_the_meshes() {
+    let mut h = explorer();
+    compose(&mut h);
+    h.get_by_label("File").click();
+    h.run_steps(2);
+    h.get_by_label("…and a session beside the meshes").click();
+    h.run_steps(2);
+    let ply = tmp("beside.ply");
+    let beside = FlexisoApp::session_beside(&ply);
+    assert_eq!(beside, ply.with_extension("session.json"));
+    let _ = std::fs::remove_file(&beside);
+    h.state_mut().start_contour_export(ply.clone());
+    h.state_mut().wait_for_exports();
+    assert_eq!(h.state().error(), None);
+    assert!(ply.exists(), "the meshes");
+    let s = flexiso::session::Session::read(&beside).expect("the session beside them");
+    assert_eq!(s.contours.len(), 2, "the whole scene, hidden contour too");
+    assert_eq!(s.contours[0].name, "brain");
+    assert_eq!(s.contours[0].color, "#123456");
+}

@@ -1,4 +1,5 @@
-//! Slices and the clipping plane in the renderer (issue 16), checked by
+//! Slices, the clipping plane and the cut-away box in the renderer
+//! (issue 16), checked by
 //! the pixels of headless renders and by picking. On whatever adapter
 //! wgpu finds (Mesa's lavapipe without a GPU); without one these tests
 //! print a note and pass, unless `FLEXISO_REQUIRE_GPU=1`.
@@ -6,7 +7,7 @@
 use std::sync::Arc;
 
 use flexiso::render::{
-    Camera, ClipPlane, HeadlessMesh, HeadlessScene, SliceQuad, ViewPreset, icosphere,
+    Camera, ClipPlane, CutBox, HeadlessMesh, HeadlessScene, SliceQuad, ViewPreset, icosphere,
     render_scene_to_image,
 };
 
@@ -249,4 +250,129 @@ fn picking_skips_what_the_clip_cuts_away_and_what_lies_behind_a_slice() {
     assert_eq!(pick(&r), Some(1u64.into()));
     r.set_style(1u64, RED, false, false);
     assert_eq!(pick(&r), None, "the far one is behind the slice");
+}
+
+const BLUE: [f32; 4] = [0.1, 0.2, 0.9, 1.0];
+
+fn bluish(p: &image::Rgba<u8>) -> bool {
+    p[2] > 60 && u16::from(p[0]) * 2 < u16::from(p[2]) && u16::from(p[1]) * 3 < u16::from(p[2]) * 2
+}
+
+#[test]
+fn the_cut_away_box_opens_a_corner_onto_what_lies_inside() {
+    if gpu().is_none() {
+        return;
+    }
+    // A blue ball inside a red one: from outside only the red shows.
+    let (po, no, io) = icosphere([0.0; 3], 1.5, 4);
+    let (pi, ni, ii) = icosphere([0.0; 3], 0.8, 4);
+    let outer = HeadlessMesh {
+        positions: &po,
+        normals: &no,
+        indices: &io,
+        colour: RED,
+    };
+    let inner = HeadlessMesh {
+        positions: &pi,
+        normals: &ni,
+        indices: &ii,
+        colour: BLUE,
+    };
+    let (w, h) = (240, 240);
+    // Coronal (from −y): +x to the right, +z up.
+    let whole = HeadlessScene {
+        meshes: vec![outer, inner],
+        camera: Some(camera(ViewPreset::Coronal)),
+        ..Default::default()
+    };
+    let img = render_scene_to_image(&whole, w, h).expect("render");
+    assert_eq!(
+        img.pixels().filter(|p| bluish(p)).count(),
+        0,
+        "the inner ball hidden"
+    );
+    let red = img.pixels().filter(|p| reddish(p)).count();
+    assert!(red > 5000, "{red} red pixels");
+
+    // Cut away the octant x > 0, y < 0 (towards the eye), z > 0: the
+    // inner ball shows in the picture's upper right quarter, only there.
+    let cut = HeadlessScene {
+        cut_box: Some(CutBox {
+            lo: [0.0, -2.0, 0.0],
+            hi: [2.0, 0.0, 2.0],
+        }),
+        ..whole.clone()
+    };
+    let img = render_scene_to_image(&cut, w, h).expect("render");
+    save("cut_away_box.png", &img);
+    let (cx, cy) = (w / 2, h / 2);
+    let mut quarters = [0usize; 4];
+    for (x, y, p) in img.enumerate_pixels() {
+        if !bluish(p) {
+            continue;
+        }
+        // A margin of a few pixels around the quarters' borders.
+        let (dx, dy) = (x as i64 - cx as i64, y as i64 - cy as i64);
+        if dx.abs() < 4 || dy.abs() < 4 {
+            continue;
+        }
+        quarters[usize::from(dx > 0) + 2 * usize::from(dy > 0)] += 1;
+    }
+    // Index 1: right, above the centre (dy < 0).
+    assert!(
+        quarters[1] > 150,
+        "the inner ball through the cut: {quarters:?}"
+    );
+    assert_eq!(
+        quarters[0] + quarters[2] + quarters[3],
+        0,
+        "hidden elsewhere: {quarters:?}"
+    );
+    // The red ball still fills the other three quarters.
+    let red_cut = img.pixels().filter(|p| reddish(p)).count();
+    assert!(red_cut * 4 > red * 2, "{red_cut} of {red} red pixels stay");
+}
+
+#[test]
+fn picking_skips_what_the_cut_away_box_cuts_away() {
+    let Some(g) = gpu() else { return };
+    let mut r = g.renderer();
+    // Two spheres along x; seen from +x, the one at x = +2 is in front.
+    let (p, n, i) = icosphere([2.0, 0.0, 0.0], 0.8, 3);
+    r.set_mesh(&g.device, &g.queue, 1u64, &p, &n, &i)
+        .expect("mesh");
+    let (p, n, i) = icosphere([-2.0, 0.0, 0.0], 0.8, 3);
+    r.set_mesh(&g.device, &g.queue, 2u64, &p, &n, &i)
+        .expect("mesh");
+    let mut c = Camera::default();
+    c.fit([-3.0; 3], [3.0; 3]);
+    c.set_preset(ViewPreset::PlusX);
+    let (w, h) = (200.0, 200.0);
+    let pick = |r: &flexiso::render::Renderer| r.pick(&c, w, h, w / 2.0, h / 2.0);
+    assert_eq!(pick(&r).map(|x| x.0), Some(1u64.into()), "the near sphere");
+    // The near sphere inside the box: the far one is picked through it.
+    r.set_cut_box(Some(CutBox {
+        lo: [1.0, -1.0, -1.0],
+        hi: [3.0, 1.0, 1.0],
+    }));
+    let (id, hit) = pick(&r).expect("a hit");
+    assert_eq!(Some(id), Some(2u64.into()), "through the box");
+    assert!(hit[0] < -1.0, "on the far sphere: {hit:?}");
+    // Only the near sphere's front cap cut away: its inside, behind the
+    // cap, is hit (it is drawn there).
+    r.set_cut_box(Some(CutBox {
+        lo: [2.3, -1.0, -1.0],
+        hi: [3.0, 1.0, 1.0],
+    }));
+    let (id, hit) = pick(&r).expect("a hit");
+    assert_eq!(Some(id), Some(1u64.into()), "the near sphere's far side");
+    assert!(hit[0] < 2.0, "behind the cap: {hit:?}");
+    // A box off the ray changes nothing.
+    r.set_cut_box(Some(CutBox {
+        lo: [1.0, 2.0, 2.0],
+        hi: [3.0, 3.0, 3.0],
+    }));
+    assert_eq!(pick(&r).map(|x| x.0), Some(1u64.into()));
+    r.set_cut_box(None);
+    assert_eq!(pick(&r).map(|x| x.0), Some(1u64.into()));
 }

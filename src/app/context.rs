@@ -1,5 +1,6 @@
 //! Context and annotations in the 3D view, wired once per frame: the
-//! slice panel's slices and clipping plane ([`panels::slices`]), the
+//! slice panel's slices, clipping plane and cut-away box
+//! ([`panels::slices`]), the
 //! contours' names as labels, the legend of the visible contours and the
 //! axis triad ([`ViewContext`]). All of it is view state: the View menu's
 //! switches, the slices and the clip are saved in sessions but are not
@@ -15,7 +16,7 @@ use super::panels::slices::{SectionSource, SlicePanel, rgb};
 use super::panels::view3d::{Label, ViewContext};
 use super::selection::Contour;
 use crate::render::overlay::LegendEntry;
-use crate::render::{ClipPlane, ViewPreset};
+use crate::render::{ClipPlane, CutBox, ViewPreset, label_anchor};
 
 /// What a contour is called in the legend and its label: its name, or
 /// "contour N" without one.
@@ -27,22 +28,18 @@ pub fn display_name(c: &Contour) -> String {
     }
 }
 
-/// The highest point of a mesh that the clipping plane keeps (where its
-/// label goes): on top of the surface, seen from the usual views.
-fn top_point(positions: &[[f32; 3]], clip: Option<ClipPlane>) -> Option<[f32; 3]> {
-    positions
-        .iter()
-        .copied()
-        .filter(|p| clip.is_none_or(|c| c.keeps(*p)))
-        .max_by(|a, b| a[2].total_cmp(&b[2]).then(a[1].total_cmp(&b[1])))
-}
-
-/// Names a clipping plane in a cache key.
-fn clip_key(clip: Option<ClipPlane>) -> u64 {
+/// Names a clipping plane and a cut-away box in a cache key.
+fn clip_key(clip: Option<ClipPlane>, cut: Option<CutBox>) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::hash::DefaultHasher::new();
     if let Some(c) = clip {
         for x in c.normal.iter().chain([&c.offset]) {
+            x.to_bits().hash(&mut h);
+        }
+    }
+    if let Some(b) = cut {
+        1u8.hash(&mut h);
+        for x in b.lo.iter().chain(&b.hi) {
             x.to_bits().hash(&mut h);
         }
     }
@@ -78,15 +75,16 @@ impl FlexisoApp {
         self.slices.update(&sources);
         let view = self.menu.view;
         let clip = self.slices.clip_plane();
+        let cut_box = self.slices.cut_box();
         let labels = if view.labels {
             shown
                 .iter()
                 .filter_map(|c| {
-                    let key = (c.id.0, c.version, clip_key(clip));
+                    let key = (c.id.0, c.version, clip_key(clip, cut_box));
                     let anchor = match self.slices.label_anchors.get(&key) {
                         Some(a) => (*a)?,
                         None => {
-                            let a = top_point(&c.mesh.as_ref()?.positions, clip);
+                            let a = label_anchor(&c.mesh.as_ref()?.positions, clip, cut_box);
                             self.slices.label_anchors.insert(key, a);
                             a?
                         }
@@ -110,6 +108,7 @@ impl FlexisoApp {
         self.view3d.context = ViewContext {
             slices: self.slices.quads(),
             clip,
+            cut_box,
             labels,
             legend: if view.legend {
                 self.legend_entries()
@@ -143,6 +142,11 @@ impl FlexisoApp {
     /// The slice panel.
     pub fn slices(&self) -> &SlicePanel {
         &self.slices
+    }
+
+    /// Blocks until the slices' images are rebuilt (tests, scripts).
+    pub fn wait_for_slices(&mut self) {
+        self.slices.wait();
     }
 
     /// The View menu's switches, to change (tests, scripts).

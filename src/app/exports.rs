@@ -214,13 +214,22 @@ impl FlexisoApp {
         };
         match image {
             // PNG encoding takes tens of milliseconds: not on this thread.
-            Ok(mut img) => self.export_in_background(move || {
-                crate::render::overlay::draw_legend(&mut img, &legend);
-                match img.save(&path) {
-                    Ok(()) => Ok(format!("saved {}", path.display())),
-                    Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
-                }
-            }),
+            Ok(mut img) => {
+                // The names as the view shows them (View > Contour names).
+                let labels = if self.menu.view.labels {
+                    self.view3d.image_labels(img.width(), img.height())
+                } else {
+                    Vec::new()
+                };
+                self.export_in_background(move || {
+                    crate::render::overlay::draw_labels(&mut img, &labels);
+                    crate::render::overlay::draw_legend(&mut img, &legend);
+                    match img.save(&path) {
+                        Ok(()) => Ok(format!("saved {}", path.display())),
+                        Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
+                    }
+                })
+            }
             Err(e) => self.error = Some(format!("screenshot: {e:#}")),
         }
     }

@@ -172,7 +172,7 @@ impl FlexisoApp {
             recovery: None,
             recovery_offer: None,
             recovered: false,
-            slices: Default::default(),
+            slices: panels::slices::SlicePanel::new(notify.clone()),
             first_screen: false,
             frame_pending: Vec::new(),
             preview: Preview::new(notify.clone()),

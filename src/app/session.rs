@@ -14,7 +14,8 @@ use super::history::Scene;
 use super::ids::ContourId;
 use super::selection::{ContourState, palette};
 use crate::session::{
-    CameraState, Session, SessionClip, SessionContour, SessionSlices, SessionView, format_colour,
+    CameraState, Session, SessionClip, SessionContour, SessionCutBox, SessionSlices, SessionView,
+    format_colour,
 };
 
 /// The recovery file is written once the scene has stayed changed this
@@ -108,6 +109,13 @@ impl FlexisoApp {
                     keep: if c.keep_below { "below" } else { "above" }.into(),
                 })
             },
+            cut_box: {
+                let b = &self.slices.cut_box;
+                b.on.then_some(SessionCutBox {
+                    min: b.lo,
+                    max: b.hi,
+                })
+            },
             view: {
                 let v = self.menu.view;
                 Some(SessionView {
@@ -155,6 +163,14 @@ impl FlexisoApp {
                     ))
                 }
             }
+        }
+        let cut = &mut self.slices.cut_box;
+        cut.on = s.cut_box.is_some();
+        if let Some(b) = &s.cut_box {
+            let d = SessionCutBox::default();
+            let f = |v: f32, dv: f32| if v.is_finite() { v.clamp(0.0, 1.0) } else { dv };
+            cut.lo = std::array::from_fn(|i| f(b.min[i], d.min[i]));
+            cut.hi = std::array::from_fn(|i| f(b.max[i], d.max[i]));
         }
         let v = s.view.unwrap_or_default();
         let view = &mut self.menu.view;

@@ -6,10 +6,11 @@
 //! superarc at `--iso` (default: the middle of the arc's value range);
 //! otherwise every contour at `--iso` (default: the middle of the value
 //! range), each in its own colour. With `--session S.json`, the session's
-//! visible contours in their colours, from its camera, with its slices
-//! and clipping plane and a legend of the contours' names (unless the
-//! session's view switches it off, or `--no-legend`): the explorer's
-//! picture of that scene.
+//! visible contours in their colours, from its camera, with its slices,
+//! clipping plane and cut-away box, a legend of the contours' names (unless the
+//! session's view switches it off, or `--no-legend`) and each contour's
+//! name beside it when the session's view shows labels (unless
+//! `--no-labels`): the explorer's picture of that scene.
 
 use std::path::PathBuf;
 
@@ -54,6 +55,10 @@ pub struct Args {
     /// Leave out the legend a session's picture carries.
     #[arg(long)]
     pub no_legend: bool,
+    /// Leave out the contours' name labels a session's picture carries
+    /// (when its view shows them).
+    #[arg(long)]
+    pub no_labels: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -249,6 +254,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     let mut legend = Vec::new();
+    let mut labels = Vec::new();
     if let Some((s, _)) = &session {
         let rgb = |i: usize| {
             let [r, g, b, _] = scene.meshes[i].colour;
@@ -292,6 +298,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let at = bounds.0[axis] + c.at.clamp(0.0, 1.0) * (bounds.1[axis] - bounds.0[axis]);
             scene.clip = Some(crate::render::ClipPlane::axis(axis, at, c.keep_below()));
         }
+        if let Some(b) = &s.cut_box {
+            let (lo, hi) = b.world(bounds.0, bounds.1);
+            scene.cut_box = Some(crate::render::CutBox { lo, hi });
+        }
+        if !args.no_labels && s.view.unwrap_or_default().labels {
+            let camera = scene.camera.unwrap_or_default();
+            let vp = camera.view_proj(width as f32 / height.max(1) as f32);
+            labels = surfaces
+                .iter()
+                .enumerate()
+                .filter_map(|(i, m)| {
+                    let anchor =
+                        crate::render::label_anchor(&m.positions, scene.clip, scene.cut_box)?;
+                    Some(crate::render::overlay::ImageLabel {
+                        text: names[i].clone(),
+                        colour: rgb(i),
+                        at: crate::render::overlay::project_to_image(vp, anchor, width, height)?,
+                    })
+                })
+                .collect();
+        }
         if !args.no_legend && s.view.unwrap_or_default().legend {
             legend = names
                 .iter()
@@ -305,6 +332,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut img =
         crate::render::render_scene_to_image(&scene, width, height).context("rendering failed")?;
+    crate::render::overlay::draw_labels(&mut img, &labels);
     crate::render::overlay::draw_legend(&mut img, &legend);
     if super::is_stdio(&args.out) {
         let mut png = Vec::new();

@@ -12,8 +12,14 @@
 //! points to are discarded in `mesh.wgsl`, and picking casts only along
 //! the part of the ray on the kept side (a half-space meets a ray in one
 //! interval, so "the nearest kept hit" is "the nearest hit within that
-//! interval"). The cut is not capped: one sees into a cut surface, its
-//! inside drawn darker by the two-sided lighting.
+//! interval"). A [`CutBox`] cuts away what lies inside an axis-aligned
+//! box (a corner cut out of a head shows the brain inside): its
+//! fragments are discarded too, and since a box meets a ray in one
+//! interval, the ray's kept part is at most two intervals, before and
+//! after it ([`CutBox::kept_parts`]); the nearest kept hit is the nearest
+//! hit within the first of them that has one. Neither cut is capped: one
+//! sees into a cut surface, its inside drawn darker by the two-sided
+//! lighting.
 
 use std::sync::Arc;
 
@@ -73,6 +79,78 @@ impl ClipPlane {
         let [x, y, z] = self.normal;
         [x, y, z, self.offset]
     }
+}
+
+/// An axis-aligned box whose inside is cut away from every mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CutBox {
+    /// The low corner.
+    pub lo: [f32; 3],
+    /// The high corner.
+    pub hi: [f32; 3],
+}
+
+impl CutBox {
+    /// Whether `p` is kept (drawn): outside the box (its faces count as
+    /// inside, as in the shader).
+    pub fn keeps(&self, p: [f32; 3]) -> bool {
+        !(0..3).all(|a| self.lo[a] <= p[a] && p[a] <= self.hi[a])
+    }
+
+    /// Where the line `origin + t dir` is inside the box: `[t_in, t_out]`
+    /// (any t, also negative), None when it misses.
+    pub fn ray_inside(&self, origin: Vec3, dir: Vec3) -> Option<(f32, f32)> {
+        let (mut t_in, mut t_out) = (f32::NEG_INFINITY, f32::INFINITY);
+        for a in 0..3 {
+            let (o, d) = (origin[a], dir[a]);
+            if d.abs() < 1e-12 {
+                if o < self.lo[a] || o > self.hi[a] {
+                    return None;
+                }
+                continue;
+            }
+            let (t0, t1) = ((self.lo[a] - o) / d, (self.hi[a] - o) / d);
+            t_in = t_in.max(t0.min(t1));
+            t_out = t_out.min(t0.max(t1));
+        }
+        (t_in <= t_out).then_some((t_in, t_out))
+    }
+
+    /// The parts of `[t0, t1]` of the ray `origin + t dir` outside the
+    /// box, nearest first (none, one or two, each non-empty).
+    pub fn kept_parts(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Vec<(f32, f32)> {
+        let Some((t_in, t_out)) = self.ray_inside(origin, dir) else {
+            return if t0 < t1 { vec![(t0, t1)] } else { Vec::new() };
+        };
+        [(t0, t1.min(t_in)), (t0.max(t_out), t1)]
+            .into_iter()
+            .filter(|(a, b)| a < b)
+            .collect()
+    }
+}
+
+/// Vertices a label's anchor is looked for among, at most: every k-th of
+/// a bigger mesh (a label needs no exact top, and dragging the clipping
+/// plane looks again each frame: a pass over millions of vertices would
+/// cost the frame milliseconds).
+pub const ANCHOR_CANDIDATES: usize = 65_536;
+
+/// Where a contour's name label goes: the highest point of its mesh that
+/// the clipping plane keeps (on top of the surface, seen from the usual
+/// views), among at most [`ANCHOR_CANDIDATES`] of its vertices, outside
+/// the cut-away box `cut`; None when all of them are cut away.
+pub fn label_anchor(
+    positions: &[[f32; 3]],
+    clip: Option<ClipPlane>,
+    cut: Option<CutBox>,
+) -> Option<[f32; 3]> {
+    let step = positions.len().div_ceil(ANCHOR_CANDIDATES).max(1);
+    positions
+        .iter()
+        .step_by(step)
+        .copied()
+        .filter(|p| clip.is_none_or(|c| c.keeps(*p)) && cut.is_none_or(|c| c.keeps(*p)))
+        .max_by(|a, b| a[2].total_cmp(&b[2]).then(a[1].total_cmp(&b[1])))
 }
 
 /// An image on a rectangle of the scene.
@@ -225,6 +303,44 @@ impl SliceSlot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ray_through_the_cut_away_box_is_kept_before_and_after_it() {
+        let cut = CutBox {
+            lo: [1.0, -1.0, -1.0],
+            hi: [2.0, 1.0, 1.0],
+        };
+        // Along +x from the origin: inside for x in [1, 2].
+        assert_eq!(
+            cut.kept_parts(Vec3::ZERO, Vec3::X, 0.0, f32::INFINITY),
+            vec![(0.0, 1.0), (2.0, f32::INFINITY)]
+        );
+        // Ending inside the box: only the part before it.
+        assert_eq!(
+            cut.kept_parts(Vec3::ZERO, Vec3::X, 0.0, 1.5),
+            vec![(0.0, 1.0)]
+        );
+        // Starting inside: only the part after it.
+        assert_eq!(
+            cut.kept_parts(Vec3::new(1.5, 0.0, 0.0), Vec3::X, 0.0, 10.0),
+            vec![(0.5, 10.0)]
+        );
+        // Missing the box: all of it.
+        assert_eq!(
+            cut.kept_parts(Vec3::new(0.0, 5.0, 0.0), Vec3::X, 0.0, 3.0),
+            vec![(0.0, 3.0)]
+        );
+        // Pointing away: the box lies behind, all of it is kept.
+        assert_eq!(
+            cut.kept_parts(Vec3::ZERO, -Vec3::X, 0.0, 3.0),
+            vec![(0.0, 3.0)]
+        );
+        assert!(!cut.keeps([1.5, 0.0, 0.0]) && cut.keeps([0.5, 0.0, 0.0]));
+        // A label's anchor leaves the box out.
+        let points = [[1.5, 0.0, 0.9], [0.0, 0.0, 0.5]];
+        assert_eq!(label_anchor(&points, None, None), Some(points[0]));
+        assert_eq!(label_anchor(&points, None, Some(cut)), Some(points[1]));
+    }
 
     #[test]
     fn the_kept_interval_of_a_ray_is_on_the_kept_side() {

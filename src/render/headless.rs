@@ -2,7 +2,7 @@
 //! Used by `flexiso render` and the render tests; works on software
 //! adapters (Mesa llvmpipe/lavapipe) as well as real GPUs.
 
-use super::{Camera, ClipPlane, RenderError, Renderer, SliceQuad};
+use super::{Camera, ClipPlane, CutBox, RenderError, Renderer, SliceQuad};
 
 /// A device of our own, for headless use.
 pub struct Gpu {
@@ -82,6 +82,8 @@ pub struct HeadlessScene<'a> {
     pub slices: Vec<SliceQuad>,
     /// The clipping plane.
     pub clip: Option<ClipPlane>,
+    /// The cut-away box.
+    pub cut_box: Option<CutBox>,
 }
 
 /// Renders `meshes` into a `width × height` image on a GPU of its own.
@@ -130,6 +132,7 @@ pub fn render_scene_to_image(
         renderer.set_slice(i, Some(q.clone()));
     }
     renderer.set_clip(scene.clip);
+    renderer.set_cut_box(scene.cut_box);
     let bounds = scene.bounds;
     if let Some((lo, hi)) = bounds {
         renderer.set_bounds(lo, hi);

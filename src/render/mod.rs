@@ -76,7 +76,7 @@ pub mod overlay;
 mod renderer;
 
 pub use camera::{Camera, ViewPreset};
-pub use context::{ClipPlane, SliceQuad};
+pub use context::{ClipPlane, CutBox, SliceQuad, label_anchor};
 pub use egui_texture::EguiTexture;
 pub use geometry::{PreparedMesh, compute_normals, icosphere};
 pub use headless::{Gpu, HeadlessMesh, HeadlessScene, render_scene_to_image, render_to_image};

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
-use super::context::{ClipPlane, MAX_SLICES, SliceQuad, SliceSlot, SliceVertex};
+use super::context::{ClipPlane, CutBox, MAX_SLICES, SliceQuad, SliceSlot, SliceVertex};
 use super::geometry::{Corners, GpuVertex, PreparedMesh, ray_box};
 use super::{MeshId, RenderError};
 
@@ -67,6 +67,10 @@ struct FrameUniform {
     clip: [f32; 4],
     /// x: 1 when the clipping plane is on.
     clip_on: [f32; 4],
+    /// The cut-away box's low corner (xyz); w: 1 when it is on.
+    cut_lo: [f32; 4],
+    /// Its high corner.
+    cut_hi: [f32; 4],
 }
 
 /// Per-mesh uniforms (layout matches `Style` in mesh.wgsl).
@@ -151,6 +155,7 @@ pub struct Renderer {
     slice_sampler: wgpu::Sampler,
     slices: [SliceSlot; MAX_SLICES],
     clip: Option<ClipPlane>,
+    cut_box: Option<CutBox>,
     frame_buffer: wgpu::Buffer,
     frame_bind: wgpu::BindGroup,
     meshes: BTreeMap<MeshId, Mesh>,
@@ -444,6 +449,7 @@ impl Renderer {
             slice_sampler,
             slices: Default::default(),
             clip: None,
+            cut_box: None,
             frame_buffer,
             frame_bind,
             meshes: BTreeMap::new(),
@@ -793,6 +799,20 @@ impl Renderer {
         self.clip
     }
 
+    /// Cuts away what lies inside `cut` from every mesh (None: nothing).
+    /// Picking follows.
+    pub fn set_cut_box(&mut self, cut: Option<CutBox>) {
+        if self.cut_box != cut {
+            self.cut_box = cut;
+            self.scene_version += 1;
+        }
+    }
+
+    /// The cut-away box in use.
+    pub fn cut_box(&self) -> Option<CutBox> {
+        self.cut_box
+    }
+
     /// Shows `quad` in slot `slot` (`0..MAX_SLICES`; others are ignored),
     /// or nothing there with None. The image is uploaded at the next
     /// render (into the old texture when it has the same size): call this
@@ -865,6 +885,12 @@ impl Renderer {
             line_colour: LINE_COLOUR,
             clip: self.clip.map_or([0.0; 4], |c| c.as_vec4()),
             clip_on: [f32::from(u8::from(self.clip.is_some())), 0.0, 0.0, 0.0],
+            cut_lo: self
+                .cut_box
+                .map_or([0.0; 4], |b| [b.lo[0], b.lo[1], b.lo[2], 1.0]),
+            cut_hi: self
+                .cut_box
+                .map_or([0.0; 4], |b| [b.hi[0], b.hi[1], b.hi[2], 0.0]),
         };
         queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
 
@@ -1065,8 +1091,8 @@ impl Renderer {
     /// from `camera`: its id and the world position hit. Casts a ray on the
     /// CPU against the stored triangles, skipping meshes whose bounding box
     /// the ray misses or enters beyond the nearest hit so far. Hidden
-    /// meshes, what the clipping plane cuts away and what lies behind a
-    /// slice are not hit.
+    /// meshes, what the clipping plane and the cut-away box cut away and
+    /// what lies behind a slice are not hit.
     pub fn pick(
         &self,
         camera: &Camera,
@@ -1094,8 +1120,23 @@ impl Renderer {
         if t1 <= t0 {
             return None;
         }
-        let origin = eye + t0 * dir;
-        let t1 = t1 - t0;
+        // Outside the cut-away box: at most two intervals, nearest first;
+        // the nearest kept hit is the first interval's nearest hit in it.
+        let parts = match &self.cut_box {
+            Some(b) => b.kept_parts(eye, dir, t0, t1),
+            None => vec![(t0, t1)],
+        };
+        parts
+            .into_iter()
+            .find_map(|(a, b)| self.cast(eye + a * dir, dir, b - a))
+    }
+
+    /// The nearest drawn mesh hit by the ray `origin + t dir` for
+    /// `0 <= t <= t1`.
+    fn cast(&self, origin: Vec3, dir: Vec3, t1: f32) -> Option<(MeshId, [f32; 3])> {
+        if t1 <= 0.0 {
+            return None;
+        }
         let mut candidates: Vec<(f32, MeshId, &Mesh)> = self
             .meshes
             .iter()

@@ -11,6 +11,8 @@ pub fn settle(h: &mut Harness<'_, FlexisoApp>) {
     h.run_steps(2);
     h.state_mut().wait_for_extractions();
     h.run_steps(2);
+    h.state_mut().wait_for_slices();
+    h.run_steps(1);
 }
 
 /// A click: press and release at `p` (after moving there).

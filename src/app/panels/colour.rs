@@ -91,12 +91,23 @@ fn picker(ui: &mut egui::Ui, id: egui::Id, colour: &mut Color32) -> bool {
         rgb_changed |= ui.add(egui::DragValue::new(&mut g).prefix("G ")).changed();
         rgb_changed |= ui.add(egui::DragValue::new(&mut b).prefix("B ")).changed();
     });
-    let mut hex = crate::session::format_colour([colour.r(), colour.g(), colour.b()]);
+    // What is typed is kept while the field has the focus: a partial
+    // code ("#1f") is no colour yet, and rebuilding the text from the
+    // colour each frame would throw each keystroke away.
+    let hex_id = id.with("hex");
+    let mut hex = ui
+        .data(|d| d.get_temp::<String>(hex_id))
+        .unwrap_or_else(|| crate::session::format_colour([colour.r(), colour.g(), colour.b()]));
     ui.horizontal(|ui| {
         let label = ui.label("hex");
         let resp = ui
             .add(egui::TextEdit::singleline(&mut hex).desired_width(80.0))
             .labelled_by(label.id);
+        if resp.has_focus() {
+            ui.data_mut(|d| d.insert_temp(hex_id, hex.clone()));
+        } else {
+            ui.data_mut(|d| d.remove::<String>(hex_id));
+        }
         if resp.changed()
             && let Some([hr, hg, hb]) = crate::session::parse_colour(hex.trim())
         {

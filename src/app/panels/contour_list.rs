@@ -173,7 +173,7 @@ pub fn ui(
                                 RichText::new(if c.extracting() {
                                     "extracting…".to_string()
                                 } else {
-                                    format!("extracted in {:.1} ms", c.extract_ms)
+                                    format!("extracted in {}", fmt_ms(c.extract_ms))
                                 })
                                 .weak(),
                             );
@@ -187,11 +187,13 @@ pub fn ui(
                         None if c.mesh.is_some() => {
                             let n = c.mesh.as_ref().map_or(0, |m| m.num_triangles());
                             ui.label(format!("{n} triangles"));
-                            ui.horizontal(|ui| {
+                            // Wrapped: a long line would widen the panel
+                            // and shift the 3D view.
+                            ui.horizontal_wrapped(|ui| {
                                 ui.spinner();
                                 ui.label(format!(
-                                    "measuring… (extracted in {:.1} ms)",
-                                    c.extract_ms
+                                    "measuring… (extracted in {})",
+                                    fmt_ms(c.extract_ms)
                                 ));
                             });
                         }
@@ -229,4 +231,13 @@ fn show_all(selection: &mut Selection) {
         c.visible = true;
     }
     selection.isolated = None;
+}
+
+/// A duration: milliseconds below a second, else seconds.
+fn fmt_ms(ms: f64) -> String {
+    if ms >= 1000.0 {
+        format!("{:.1} s", ms / 1e3)
+    } else {
+        format!("{ms:.1} ms")
+    }
 }

@@ -14,7 +14,7 @@ use egui::{Color32, Sense};
 use crate::app::ids::ContourId;
 use crate::render::overlay::LegendEntry;
 use crate::render::{
-    Camera, ClipPlane, EguiTexture, MeshId, PreparedMesh, Renderer, SliceQuad, ViewPreset,
+    Camera, ClipPlane, CutBox, EguiTexture, MeshId, PreparedMesh, Renderer, SliceQuad, ViewPreset,
 };
 
 /// What a mesh of the scene is, as the explorer names it; the view gives
@@ -110,12 +110,21 @@ pub struct ViewContext {
     pub slices: [Option<(u64, SliceQuad)>; 3],
     /// The clipping plane.
     pub clip: Option<ClipPlane>,
+    /// The cut-away box.
+    pub cut_box: Option<CutBox>,
     /// Names drawn beside the contours (empty: none).
     pub labels: Vec<Label>,
     /// The legend of the visible contours (empty: none).
     pub legend: Vec<LegendEntry>,
     /// Draw the axis triad.
     pub triad: bool,
+}
+
+impl ViewContext {
+    /// Whether the clipping plane and the cut-away box keep `p`.
+    pub fn keeps(&self, p: [f32; 3]) -> bool {
+        self.clip.is_none_or(|c| c.keeps(p)) && self.cut_box.is_none_or(|b| b.keeps(p))
+    }
 }
 
 /// A name drawn in the view at a point of its contour.
@@ -182,6 +191,26 @@ impl View3d {
             }
         }
         r.set_clip(self.context.clip);
+        r.set_cut_box(self.context.cut_box);
+    }
+
+    /// The labels as a picture of the view `width × height` pixels shows
+    /// them (PNG exports): projected by the camera, those whose point the
+    /// clipping plane cuts away left out.
+    pub fn image_labels(&self, width: u32, height: u32) -> Vec<crate::render::overlay::ImageLabel> {
+        let vp = self.camera.view_proj(width as f32 / height.max(1) as f32);
+        self.context
+            .labels
+            .iter()
+            .filter(|l| self.context.keeps(l.anchor))
+            .filter_map(|l| {
+                Some(crate::render::overlay::ImageLabel {
+                    text: l.text.clone(),
+                    colour: [l.colour.r(), l.colour.g(), l.colour.b()],
+                    at: crate::render::overlay::project_to_image(vp, l.anchor, width, height)?,
+                })
+            })
+            .collect()
     }
 
     /// Labels, legend and triad over the image.
@@ -189,8 +218,9 @@ impl View3d {
         let painter = ui.painter_at(rect);
         let aspect = rect.width() / rect.height().max(1.0);
         let vp = self.camera.view_proj(aspect);
+        let mut placed: Vec<[f32; 4]> = Vec::new();
         for l in &self.context.labels {
-            if self.context.clip.is_some_and(|c| !c.keeps(l.anchor)) {
+            if !self.context.keeps(l.anchor) {
                 continue;
             }
             let q = vp * glam::Vec3::from(l.anchor).extend(1.0);
@@ -206,6 +236,17 @@ impl View3d {
             let galley = painter.layout_no_wrap(l.text.clone(), font, Color32::WHITE);
             let at = p + egui::vec2(8.0, -8.0 - galley.size().y);
             let bg = egui::Rect::from_min_size(at, galley.size()).expand(3.0);
+            // Nearby labels would cover each other: one moves up.
+            let lift = crate::render::overlay::clear_of(
+                &placed,
+                [bg.min.x, bg.min.y, bg.max.x, bg.max.y],
+                3.0,
+            );
+            let (at, bg) = (
+                at - egui::vec2(0.0, lift),
+                bg.translate(egui::vec2(0.0, -lift)),
+            );
+            placed.push([bg.min.x, bg.min.y, bg.max.x, bg.max.y]);
             painter.line_segment([p, bg.left_bottom()], egui::Stroke::new(1.0, l.colour));
             painter.circle_filled(p, 3.0, l.colour);
             painter.rect_filled(bg, 3.0, Color32::from_black_alpha(170));
