@@ -6,7 +6,8 @@
 #                     important branches as contours
 #   02_selected.png   two contours selected (click, shift-click on arcs)
 #   03_dragged.png    the first contour's marker dragged up its arc
-#   04_simplified.png the level moved on the simplification curve
+#   04_finer.png      a finer level (a click left on the simplification curve)
+#   04_simplified.png a coarser level (a click right on the curve)
 #   05_all.png        "all contours at h" switched on
 #
 # Usage: scripts/screenshot.sh [OUT_DIR] (default out/); FLEXISO_INPUT picks
@@ -141,9 +142,14 @@ if [ -n "${mx:-}" ]; then
   shot 03_dragged.png
 fi
 
+# The first screen sits on the curve's widest plateau, so a short drag may
+# not leave it: click well left (smaller features kept: more arcs), then
+# well right (fewer arcs). The first screen's level is the third.
 read -r cx0 cy0 cx1 cy1 <<<"$(rect curve)"
 cy=$(( (cy0 + cy1) / 2 ))
-drag $((cx0 + (cx1 - cx0) * 30 / 100)) "$cy" $((cx0 + (cx1 - cx0) * 60 / 100)) "$cy"
+click $((cx0 + (cx1 - cx0) * 15 / 100)) "$cy" 4
+shot 04_finer.png
+click $((cx0 + (cx1 - cx0) * 85 / 100)) "$cy" 4
 shot 04_simplified.png
 
 read -r kx0 ky0 kx1 ky1 <<<"$(rect allbox)"
