@@ -172,7 +172,14 @@ impl ContourMesh {
     ///    vertex) or one path (on the mesh's boundary): the triangles with
     ///    exactly one corner in the cluster, each seen as the edge opposite
     ///    that corner, join up with every link vertex on at most two of
-    ///    them and no edge twice.
+    ///    them and no edge twice, and
+    /// 3. the cluster's star (its triangles, as the collapses before left
+    ///    them) and the cone the collapse makes of it are the same surface:
+    ///    the same Euler characteristic and number of boundary loops, no
+    ///    edge on three triangles. A cluster holding a whole boundary loop
+    ///    (the hole a contour makes where it meets the volume's side at a
+    ///    vertex of the isovalue) would close it; one touching the
+    ///    boundary twice would pinch it.
     ///
     /// Collapsing a disk is a sequence of edge contractions; (2) is the
     /// link condition (Dey, Edelsbrunner, Guha & Nekhayev, "Topology
@@ -180,21 +187,30 @@ impl ContourMesh {
     /// neighbour reached from two places of the cluster would show twice
     /// in the link (its edge to the new vertex on four triangles), two
     /// triangles becoming one shows as an edge twice, an annulus as a link
-    /// in two pieces. So each collapse keeps the surface a manifold with
-    /// the same topology. Clusters are decided in turn, each against the
-    /// mesh as the collapses before it left it (a cluster's link may hold
-    /// vertices of clusters already collapsed).
+    /// in two pieces. Clusters are decided in turn, each against the mesh
+    /// as the collapses before it left it; a cluster refused because its
+    /// link held a neighbouring cluster's zero-area edges is asked again
+    /// after that neighbour collapsed (rounds until one collapses nothing).
     ///
-    /// What stays unwelded, with its zero-area triangles, is what no
+    /// What stays unwelded, with its zero-area triangles, includes what no
     /// welding can flatten without changing the topology the tree
     /// predicts: a whole contour shrunk to one point (the contour of a
     /// minimum or maximum whose value is the isovalue: a sphere of no
     /// size) and the tube or pinch around a saddle whose value is the
-    /// isovalue (two sheets meeting at the vertex). Two clusters at one
-    /// place (two sheets touching at such a saddle) stay two vertices:
-    /// welding them would make the mesh non-manifold. The topology is
-    /// checked afterwards and the whole weld undone should it have
-    /// changed (a safety net the local check should never need).
+    /// isovalue. Two clusters at one place (two sheets touching at such a
+    /// saddle) stay two vertices: welding them would make the mesh
+    /// non-manifold. The topology is checked afterwards and the whole weld
+    /// of the contour undone should it have changed.
+    ///
+    /// Not yet complete: the three checks are not the exact condition.
+    /// Some clusters they refuse could be collapsed alone without changing
+    /// the topology (an oracle that collapses each leftover cluster and
+    /// recounts the whole mesh finds them on random grids), and on some
+    /// contours they accept a collapse the final check then undoes, with
+    /// the rest of that contour's weld. Measured on colin27_ch2 at `--iso
+    /// 64` (a data value): zero-area triangles 419,767 in 527 contours
+    /// before (403,909 in the head, whose weld was undone whole), 50,460
+    /// in 528 after (36,524 in the head).
     pub fn weld(&mut self) {
         let n = self.positions.len();
         if n == 0 {
@@ -706,6 +722,36 @@ mod tests {
                     // vertices at the isovalue (it encloses nothing).
                     let v = m.signed_volume6();
                     prop_assert!(v >= 0.0, "closed contour faces in: {}", v);
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// No cluster the weld leaves could be collapsed alone without
+        /// changing the topology (the oracle recounts the whole mesh).
+        /// Known gap, see [`ContourMesh::weld`]: the local checks refuse
+        /// some such clusters; run with `--ignored` to see one.
+        #[test]
+        #[ignore = "known gap of the weld's local checks (see ContourMesh::weld)"]
+        fn no_cluster_left_by_the_weld_could_be_welded_alone(
+            field in grid(),
+            h in 0u8..5,
+        ) {
+            let (tree, _) = ContourTree::from_field(&field, &Progress::new()).unwrap();
+            for mut m in global::all_contours(&tree, &field, Isovalue::new(f64::from(h))) {
+                m.weld();
+                let after = MeshTopology::of(&m.positions, &m.indices);
+                for c in clusters(&m) {
+                    prop_assert_ne!(
+                        shape(&collapsed(&m, &c)),
+                        shape(&after),
+                        "the cluster {:?} at {:?} could have been welded",
+                        c,
+                        m.positions[c[0] as usize]
+                    );
                 }
             }
         }

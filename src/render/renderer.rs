@@ -770,7 +770,7 @@ impl Renderer {
     /// invertible (or not finite) is refused and the old one kept (false).
     pub fn set_placement(&mut self, model: Mat4) -> bool {
         let det = model.determinant();
-        if !(det.is_finite() && det.abs() > f32::EPSILON) || !model.is_finite() {
+        if !(det.is_finite() && det.abs() > f32::EPSILON && model.is_finite()) {
             return false;
         }
         if self.placement != model {
