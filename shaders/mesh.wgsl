@@ -12,14 +12,19 @@ struct Frame {
     fill_dir: vec4<f32>,
     // Bounding-box line colour, sRGB, straight alpha (used by lines.wgsl).
     line_colour: vec4<f32>,
-    // The clipping plane: fragments with dot(clip.xyz, world) > clip.w
-    // are cut away (mesh.wgsl) when clip_on.x is 1.
+    // The clipping plane, in the model frame: fragments with
+    // dot(clip.xyz, local) > clip.w are cut away (mesh.wgsl) when
+    // clip_on.x is 1.
     clip: vec4<f32>,
     clip_on: vec4<f32>,
     // The cut-away box: fragments inside [cut_lo.xyz, cut_hi.xyz] are
     // cut away when cut_lo.w is 1.
     cut_lo: vec4<f32>,
     cut_hi: vec4<f32>,
+    // The placement: model frame (meshes, box, slices, clip) to world.
+    model: mat4x4<f32>,
+    // Its inverse transpose, for normals.
+    normal_model: mat4x4<f32>,
 };
 
 struct Style {
@@ -48,6 +53,8 @@ struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    // The position in the model frame (for the clip).
+    @location(2) local: vec3<f32>,
 };
 
 // The unit vector of an octahedral encoding (Cigolle et al., JCGT 2014).
@@ -63,10 +70,14 @@ fn decode_normal(e: vec2<f32>) -> vec3<f32> {
 @vertex
 fn vs_main(in: VsIn) -> VsOut {
     var out: VsOut;
-    let world = style.origin.xyz + in.position.xyz * 65535.0 * style.scale.xyz;
+    let local = style.origin.xyz + in.position.xyz * 65535.0 * style.scale.xyz;
+    let world = (frame.model * vec4<f32>(local, 1.0)).xyz;
     out.clip = frame.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
-    out.normal = decode_normal(in.normal);
+    out.local = local;
+    // Not normalised here: the fragment stage does (and lights a zero
+    // normal as facing the viewer).
+    out.normal = (frame.normal_model * vec4<f32>(decode_normal(in.normal), 0.0)).xyz;
     return out;
 }
 
@@ -79,10 +90,10 @@ fn srgb_from_linear(c: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
-    if frame.clip_on.x > 0.5 && dot(frame.clip.xyz, in.world) > frame.clip.w {
+    if frame.clip_on.x > 0.5 && dot(frame.clip.xyz, in.local) > frame.clip.w {
         discard;
     }
-    if frame.cut_lo.w > 0.5 && all(in.world >= frame.cut_lo.xyz) && all(in.world <= frame.cut_hi.xyz) {
+    if frame.cut_lo.w > 0.5 && all(in.local >= frame.cut_lo.xyz) && all(in.local <= frame.cut_hi.xyz) {
         discard;
     }
     let v = normalize(frame.eye.xyz - in.world);

@@ -11,6 +11,10 @@ struct Frame {
     clip_on: vec4<f32>,
     cut_lo: vec4<f32>,
     cut_hi: vec4<f32>,
+    // The placement: model frame (meshes, box, slices, clip) to world.
+    model: mat4x4<f32>,
+    // Its inverse transpose, for normals.
+    normal_model: mat4x4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -25,7 +29,7 @@ struct VsOut {
 @vertex
 fn vs_main(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>) -> VsOut {
     var out: VsOut;
-    out.clip = frame.view_proj * vec4<f32>(position, 1.0);
+    out.clip = frame.view_proj * frame.model * vec4<f32>(position, 1.0);
     out.uv = uv;
     return out;
 }

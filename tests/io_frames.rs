@@ -3,7 +3,7 @@
 //! several is refused with a message naming the option and the range; a
 //! choice out of range, or on a file with one, is refused too. Files the
 //! tests write: 4D NIfTI (.nii and .nii.gz, frames and dim-5 components),
-//! vector MetaImage, 4D NRRD (vector first, time last), VTI and legacy VTK
+//! vector MetaImage, 4D MetaImage (.mha and .mhd, with channels too), 4D NRRD (vector first, time last), VTI and legacy VTK
 //! with several components, multi-frame MGH.
 #![allow(clippy::unwrap_used)]
 
@@ -141,6 +141,67 @@ fn a_vector_metaimage_reads_the_chosen_channel() {
     );
     let e = fails_with(&p, Some(1), Some(0));
     assert!(e.contains("frame 1 does not exist"), "{e}");
+}
+
+#[test]
+fn a_4d_metaimage_reads_the_chosen_frame_with_the_spatial_geometry() {
+    let dir = tempfile::tempdir().unwrap();
+    let [x, y, z] = DIMS;
+    // As ITK writes a 4D image: four numbers for sizes, spacing and
+    // offset, a 4×4 matrix; frames one after the other.
+    let header = |data: &str| {
+        format!(
+            "ObjectType = Image\nNDims = 4\nDimSize = {x} {y} {z} 3\n\
+             ElementSpacing = 0.5 2 3 1\nOffset = 10 -20 30 0\n\
+             TransformMatrix = 0 -1 0 0 1 0 0 0 0 0 1 0 0 0 0 1\n\
+             ElementType = MET_FLOAT\nElementDataFile = {data}\n"
+        )
+    };
+    let mut b = header("LOCAL").into_bytes();
+    b.extend_from_slice(&encode(&frames(3), "float32", false));
+    let mha = write(dir.path(), "t.mha", &b);
+    write(dir.path(), "t.raw", &encode(&frames(3), "float32", false));
+    let mhd = write(dir.path(), "t.mhd", header("t.raw").as_bytes());
+    for p in [&mha, &mhd] {
+        for k in 0..3 {
+            assert_eq!(read_with(p, Some(k), None), volume_k(k), "frame {k}");
+        }
+        let v = read_volume(p, &with(Some(2), None)).unwrap();
+        assert_eq!(v.field.spacing(), [0.5, 2.0, 3.0], "time is not space");
+        let g = v.field.geometry();
+        assert_eq!(g.origin, [10.0, -20.0, 30.0]);
+        assert_eq!(
+            g.direction,
+            [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        );
+        assert!(v.format.contains("frame 2 of 3"), "{}", v.format);
+        let e = fails_with(p, None, None);
+        assert!(
+            e.contains("3 frames") && e.contains("--frame T (0 to 2)"),
+            "{e}"
+        );
+        assert!(fails_with(p, Some(3), None).contains("frame 3 does not exist"));
+    }
+    // Frames of vectors: channels fastest, frames slowest.
+    let mut b = format!(
+        "NDims = 4\nDimSize = {x} {y} {z} 2\nElementNumberOfChannels = 2\n\
+         ElementType = MET_SHORT\nElementDataFile = LOCAL\n"
+    )
+    .into_bytes();
+    // Frame f, channel c holds volume 2 f + c.
+    let data: Vec<f64> = (0..2)
+        .flat_map(|f| (0..N).flat_map(move |i| (0..2).map(move |c| value(2 * f + c, i))))
+        .collect();
+    b.extend_from_slice(&encode(&data, "int16", false));
+    let p = write(dir.path(), "tv.mha", &b);
+    assert_eq!(read_with(&p, Some(1), Some(0)), volume_k(2));
+    assert_eq!(read_with(&p, Some(0), Some(1)), volume_k(1));
+    assert!(fails_with(&p, Some(1), None).contains("--component C (0 to 1)"));
+    // A file shorter than its frames is refused, not misread.
+    let mut b = header("LOCAL").into_bytes();
+    b.extend_from_slice(&encode(&frames(2), "float32", false));
+    let short = write(dir.path(), "short.mha", &b);
+    assert!(fails_with(&short, Some(0), None).contains("truncated"));
 }
 
 #[test]

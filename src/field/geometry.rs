@@ -153,6 +153,22 @@ impl Geometry {
         std::array::from_fn(|c| self.origin[c] + p[0] * d[0][c] + p[1] * d[1][c] + p[2] * d[2][c])
     }
 
+    /// [`Geometry::to_world`] as a 4×4 affine matrix, column-major
+    /// (`m[c][r]`: column `c`, row `r`), for a renderer to place the grid
+    /// frame in the world: columns 0..3 are the images of the unit
+    /// vectors (the directions), column 3 the origin. Built from
+    /// `to_world` itself, so it is the same map exports use.
+    pub fn affine(&self) -> [[f64; 4]; 4] {
+        let o = self.to_world([0.0; 3]);
+        let column = |a: usize| {
+            let mut e = [0.0; 3];
+            e[a] = 1.0;
+            let w = self.to_world(e);
+            [w[0] - o[0], w[1] - o[1], w[2] - o[2], 0.0]
+        };
+        [column(0), column(1), column(2), [o[0], o[1], o[2], 1.0]]
+    }
+
     /// A normal of the grid frame in the world: the inverse transpose of
     /// the direction matrix (the matrix itself when it is a rotation),
     /// normalised.
@@ -240,6 +256,12 @@ mod tests {
         assert!(!g.is_reflection());
         // A rotation moves normals like points (without the origin).
         assert!(close(g.normal_to_world([1.0, 0.0, 0.0]), [0.0, -1.0, 0.0]));
+        // The matrix is the same map.
+        let m = g.affine();
+        let p = [3.0, -2.0, 5.5];
+        let by_matrix: [f64; 3] =
+            std::array::from_fn(|r| (0..3).map(|c| m[c][r] * p[c]).sum::<f64>() + m[3][r]);
+        assert!(close(by_matrix, g.to_world(p)));
     }
 
     #[test]

@@ -58,6 +58,11 @@
 //!   quads drawn after the opaque meshes; a [`ClipPlane`]
 //!   ([`Renderer::set_clip`]) cuts every mesh, in the fragment shader and
 //!   in picking (see [`context`]).
+//! - Meshes, the box, slices and the clip are given in a *model frame*
+//!   that [`Renderer::set_placement`] puts in the world by one affine map
+//!   (for a volume, its grid frame into the scanner's coordinates): the
+//!   camera, lighting and picking's answers are in the world, the clip
+//!   and the slices follow the model's axes.
 //! - MSAA 4× when [`Renderer::sample_count_for`] says the adapter can.
 //! - Geometry is uploaded only by [`Renderer::set_mesh`] (at once) or by
 //!   [`Renderer::set_prepared_mesh`] + [`Renderer::upload_pending`] (a
@@ -82,6 +87,7 @@ pub use geometry::{PreparedMesh, compute_normals, icosphere};
 pub use headless::{Gpu, HeadlessMesh, HeadlessScene, render_scene_to_image, render_to_image};
 pub use renderer::{
     COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,
+    placed_box,
 };
 
 /// A renderer mesh, named by whoever adds it (the explorer maps its
@@ -135,9 +141,10 @@ pub fn palette_rgba(i: usize) -> [f32; 4] {
     ]
 }
 
-/// The box a grid of `dims` samples `spacing` apart fills, in world
-/// coordinates (sample `(0, 0, 0)` at the origin): what the views draw
-/// faint and frame the camera on.
+/// The box a grid of `dims` samples `spacing` apart fills, in the grid
+/// frame (sample `(0, 0, 0)` at the origin, axes along x, y, z): what
+/// the views draw faint, as the renderer's model frame
+/// ([`Renderer::set_placement`] puts it in the world).
 pub fn grid_bounds(dims: [usize; 3], spacing: [f64; 3]) -> ([f32; 3], [f32; 3]) {
     let extent = |i: usize| ((dims[i].max(1) - 1) as f64 * spacing[i]) as f32;
     ([0.0; 3], [extent(0), extent(1), extent(2)])

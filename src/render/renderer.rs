@@ -71,6 +71,10 @@ struct FrameUniform {
     cut_lo: [f32; 4],
     /// Its high corner.
     cut_hi: [f32; 4],
+    /// The placement: model frame to world ([`Renderer::set_placement`]).
+    model: [[f32; 4]; 4],
+    /// Its inverse transpose (upper 3×3), for normals.
+    normal_model: [[f32; 4]; 4],
 }
 
 /// Per-mesh uniforms (layout matches `Style` in mesh.wgsl).
@@ -156,6 +160,8 @@ pub struct Renderer {
     slices: [SliceSlot; MAX_SLICES],
     clip: Option<ClipPlane>,
     cut_box: Option<CutBox>,
+    /// Model frame to world (see [`Renderer::set_placement`]).
+    placement: Mat4,
     frame_buffer: wgpu::Buffer,
     frame_bind: wgpu::BindGroup,
     meshes: BTreeMap<MeshId, Mesh>,
@@ -450,6 +456,7 @@ impl Renderer {
             slices: Default::default(),
             clip: None,
             cut_box: None,
+            placement: Mat4::IDENTITY,
             frame_buffer,
             frame_bind,
             meshes: BTreeMap::new(),
@@ -743,8 +750,9 @@ impl Renderer {
         self.meshes.get(&id.into()).map(|m| m.style)
     }
 
-    /// The bounding box of the visible meshes `(min, max)`, or None when
-    /// nothing is drawn (for [`Camera::fit`]).
+    /// The world box around the visible meshes `(min, max)`, or None when
+    /// nothing is drawn (for [`Camera::fit`]): their model boxes placed
+    /// in the world ([`placed_box`]).
     pub fn visible_bounds(&self) -> Option<([f32; 3], [f32; 3])> {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -752,7 +760,35 @@ impl Renderer {
             lo = lo.min(m.cpu.bbox.0);
             hi = hi.max(m.cpu.bbox.1);
         }
-        lo.cmple(hi).all().then(|| (lo.to_array(), hi.to_array()))
+        lo.cmple(hi)
+            .all()
+            .then(|| placed_box(self.placement, lo.to_array(), hi.to_array()))
+    }
+
+    /// Places the model frame in the world: every mesh, the bounding box,
+    /// the slices and the clipping plane are given in the model frame
+    /// (for a volume: its grid, index × spacing), and `model` (an
+    /// invertible affine map) moves them where the camera looks, e.g. a
+    /// scanner's patient coordinates. So the volume's box becomes a
+    /// parallelepiped when the volume's axes are sheared or rotated, and
+    /// the clip and the slices stay along the volume's axes. Picking
+    /// returns world points. Identity by default; a map that is not
+    /// invertible (or not finite) is refused and the old one kept (false).
+    pub fn set_placement(&mut self, model: Mat4) -> bool {
+        let det = model.determinant();
+        if !(det.is_finite() && det.abs() > f32::EPSILON && model.is_finite()) {
+            return false;
+        }
+        if self.placement != model {
+            self.placement = model;
+            self.scene_version += 1;
+        }
+        true
+    }
+
+    /// The placement in use ([`Renderer::set_placement`]).
+    pub fn placement(&self) -> Mat4 {
+        self.placement
     }
 
     /// Draws the faint box `[min, max]` (the volume's extent).
@@ -891,6 +927,11 @@ impl Renderer {
             cut_hi: self
                 .cut_box
                 .map_or([0.0; 4], |b| [b.hi[0], b.hi[1], b.hi[2], 0.0]),
+            model: self.placement.to_cols_array_2d(),
+            normal_model: Mat4::from_mat3(
+                glam::Mat3::from_mat4(self.placement).inverse().transpose(),
+            )
+            .to_cols_array_2d(),
         };
         queue.write_buffer(&self.frame_buffer, 0, bytemuck::bytes_of(&frame));
 
@@ -929,7 +970,8 @@ impl Renderer {
             if m.style.colour[3] >= 1.0 {
                 opaque.push(m);
             } else {
-                transparent.push((m.cpu.centre().distance_squared(eye), id, m));
+                let centre = self.placement.transform_point3(m.cpu.centre());
+                transparent.push((centre.distance_squared(eye), id, m));
             }
         }
         transparent.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
@@ -1092,7 +1134,9 @@ impl Renderer {
     /// CPU against the stored triangles, skipping meshes whose bounding box
     /// the ray misses or enters beyond the nearest hit so far. Hidden
     /// meshes, what the clipping plane and the cut-away box cut away and
-    /// what lies behind a slice are not hit.
+    /// what lies behind a slice are not hit. The ray is cast in the model frame (the
+    /// placement's inverse applied to the eye and the direction, so its
+    /// parameter is the same in both) and the hit placed in the world.
     pub fn pick(
         &self,
         camera: &Camera,
@@ -1106,6 +1150,11 @@ impl Renderer {
         }
         let ndc = [2.0 * x / width - 1.0, 1.0 - 2.0 * y / height];
         let (eye, dir) = camera.ray(ndc, width / height);
+        let to_model = self.placement.inverse();
+        let (eye, dir) = (
+            to_model.transform_point3(eye),
+            to_model.transform_vector3(dir),
+        );
         // Only the part of the ray on the clip's kept side, in front of
         // the nearest slice, can hit: cast from where that part begins.
         let (t0, mut t1) = match &self.clip {
@@ -1159,14 +1208,36 @@ impl Renderer {
             }
         }
         best.filter(|(t, _, _)| *t <= t1)
-            .map(|(_, id, p)| (id, p.to_array()))
+            .map(|(_, id, p)| (id, self.placement.transform_point3(p).to_array()))
     }
 
     /// The world-to-clip matrix the last render used for a `width × height`
-    /// viewport (to project world points to the screen, e.g. labels).
+    /// viewport (to project world points to the screen, e.g. labels;
+    /// a point of the model frame is placed first, see
+    /// [`Renderer::set_placement`]).
     pub fn view_proj(camera: &Camera, width: f32, height: f32) -> Mat4 {
         camera.view_proj(if height > 0.0 { width / height } else { 1.0 })
     }
+}
+
+/// The world box `(min, max)` around the box `[lo, hi]` of the model
+/// frame placed by `model`: the bounds of its eight corners (the box
+/// itself for a placement that only moves, scales or turns by right
+/// angles; around a parallelepiped otherwise).
+pub fn placed_box(model: Mat4, lo: [f32; 3], hi: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let mut a = Vec3::splat(f32::INFINITY);
+    let mut b = Vec3::splat(f32::NEG_INFINITY);
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        );
+        let w = model.transform_point3(c);
+        a = a.min(w);
+        b = b.max(w);
+    }
+    (a.to_array(), b.to_array())
 }
 
 /// Writes `data` into `old` when it is big enough, else into a new buffer

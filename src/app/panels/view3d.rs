@@ -2,7 +2,13 @@
 //! own texture, shown as an egui image. Orbit camera: drag rotates, wheel
 //! zooms, right or middle drag pans, double-click fits the contours shown
 //! (again: the volume). A click
-//! on a surface picks it. Meshes are uploaded only when their version
+//! on a surface picks it. Meshes, the volume's box, slices and the clip
+//! are in the volume's grid frame (index × spacing); the view places them
+//! in the file's world ([`View3d::set_placement`], the map
+//! [`crate::field::Geometry::to_world`] that exports use), so the camera,
+//! the axis triad and picked points are in world coordinates, a rotated
+//! volume's box is a parallelepiped, and the clip and slices run along
+//! the volume's axes. Meshes are uploaded only when their version
 //! changes; styles cost a uniform write; a frame whose camera, size and
 //! scene are unchanged is not re-rendered.
 
@@ -99,6 +105,10 @@ pub struct View3d {
     slices_set: [u64; 3],
     /// Where the view was drawn last frame (tests, scripts).
     pub rect: Option<egui::Rect>,
+    /// The grid frame in the world (see the module doc).
+    placement: glam::Mat4,
+    /// The world point of the last pick that hit a surface.
+    pub last_pick: Option<[f32; 3]>,
 }
 
 /// What the view shows besides the meshes: slices, the clipping plane,
@@ -134,7 +144,7 @@ pub struct Label {
     pub text: String,
     /// Its contour's colour.
     pub colour: Color32,
-    /// Where, in world coordinates.
+    /// Where, in the grid frame (as the meshes; placed when drawn).
     pub anchor: [f32; 3],
 }
 
@@ -169,12 +179,39 @@ impl View3d {
             context: ViewContext::default(),
             slices_set: [0; 3],
             rect: None,
+            placement: glam::Mat4::IDENTITY,
+            last_pick: None,
         }
+    }
+
+    /// Places the grid frame in the world by the affine map `model` (for
+    /// a volume, its [`crate::field::Geometry::affine`]); call before
+    /// [`View3d::set_bounds`]. A map that is not invertible is ignored.
+    pub fn set_placement(&mut self, model: glam::Mat4) {
+        let det = model.determinant();
+        if !(model.is_finite() && det.is_finite() && det.abs() > f32::EPSILON) {
+            return;
+        }
+        self.placement = model;
+        if let Some(r) = &mut self.renderer {
+            r.set_placement(model);
+        }
+    }
+
+    /// The map from the grid frame to the world in use.
+    pub fn placement(&self) -> glam::Mat4 {
+        self.placement
+    }
+
+    /// The world box around the grid-frame box `[lo, hi]`.
+    fn world_box(&self, (lo, hi): ([f32; 3], [f32; 3])) -> ([f32; 3], [f32; 3]) {
+        crate::render::placed_box(self.placement, lo, hi)
     }
 
     /// Looks along a standard axis, fitted to the volume.
     pub fn set_preset(&mut self, preset: ViewPreset) {
-        if let Some((lo, hi)) = self.bounds {
+        if let Some(b) = self.bounds {
+            let (lo, hi) = self.world_box(b);
             self.camera.fit(lo, hi);
         }
         self.camera.set_preset(preset);
@@ -198,7 +235,7 @@ impl View3d {
     /// them (PNG exports): projected by the camera, those whose point the
     /// clipping plane cuts away left out.
     pub fn image_labels(&self, width: u32, height: u32) -> Vec<crate::render::overlay::ImageLabel> {
-        let vp = self.camera.view_proj(width as f32 / height.max(1) as f32);
+        let vp = self.camera.view_proj(width as f32 / height.max(1) as f32) * self.placement;
         self.context
             .labels
             .iter()
@@ -217,7 +254,7 @@ impl View3d {
     fn draw_annotations(&self, ui: &egui::Ui, rect: egui::Rect) {
         let painter = ui.painter_at(rect);
         let aspect = rect.width() / rect.height().max(1.0);
-        let vp = self.camera.view_proj(aspect);
+        let vp = self.camera.view_proj(aspect) * self.placement;
         let mut placed: Vec<[f32; 4]> = Vec::new();
         for l in &self.context.labels {
             if !self.context.keeps(l.anchor) {
@@ -322,20 +359,23 @@ impl View3d {
         }
     }
 
-    /// Frames the box `[min, max]` (contours' bounds) at the next frame,
-    /// when the view's width and height are known: the whole box shows
-    /// however narrow the view is.
+    /// Frames the box `[min, max]` (contours' bounds, grid frame) at the
+    /// next frame, when the view's width and height are known: the whole
+    /// box shows however narrow the view is.
     pub fn fit_to(&mut self, min: [f32; 3], max: [f32; 3]) {
+        let (min, max) = self.world_box((min, max));
         self.camera.fit(min, max);
         self.pending_fit = Some((min, max));
         self.fitted_to_contours = true;
     }
 
-    /// Sets the volume's box (drawn faint) and fits the camera to it.
+    /// Sets the volume's box (grid frame, drawn faint where
+    /// [`View3d::set_placement`] puts it) and fits the camera to it.
     pub fn set_bounds(&mut self, min: [f32; 3], max: [f32; 3]) {
         self.bounds = Some((min, max));
-        self.camera.fit(min, max);
-        self.pending_fit = Some((min, max));
+        let (wmin, wmax) = self.world_box((min, max));
+        self.camera.fit(wmin, wmax);
+        self.pending_fit = Some((wmin, wmax));
         if let Some(r) = &mut self.renderer {
             r.set_bounds(min, max);
         }
@@ -396,6 +436,7 @@ impl View3d {
         };
         if self.renderer.is_none() {
             let mut r = Renderer::new(&rs.device, Renderer::sample_count_for(&rs.adapter));
+            r.set_placement(self.placement);
             if let Some((lo, hi)) = self.bounds {
                 r.set_bounds(lo, hi);
             }
@@ -483,7 +524,10 @@ impl View3d {
                     self.bounds
                 }
             };
-            if let Some((lo, hi)) = target {
+            let placement = self.placement;
+            if let Some((lo, hi)) =
+                target.map(|(lo, hi)| crate::render::placed_box(placement, lo, hi))
+            {
                 fit_in_view(
                     &mut self.camera,
                     lo,
@@ -496,7 +540,8 @@ impl View3d {
         {
             let local = p - rect.min;
             match renderer.pick(&self.camera, rect.width(), rect.height(), local.x, local.y) {
-                Some((id, _)) => {
+                Some((id, at)) => {
+                    self.last_pick = Some(at);
                     events.picked = self
                         .keys
                         .get(&id)
@@ -559,7 +604,7 @@ impl View3d {
 }
 
 /// The bounds of the visible meshes of `scene` (the hover preview left
-/// out), None when nothing is drawn.
+/// out) in the grid frame, None when nothing is drawn.
 pub fn scene_bounds(scene: &[SceneMesh]) -> Option<([f32; 3], [f32; 3])> {
     let mut lo = glam::Vec3::splat(f32::INFINITY);
     let mut hi = glam::Vec3::splat(f32::NEG_INFINITY);

@@ -2,7 +2,8 @@
 //! `ElementDataFile = LOCAL` line, or `.mhd` naming a data file (`.raw`,
 //! or zlib-compressed `.zraw`).
 //!
-//! Read: `NDims` (2 or 3), `DimSize`, `ElementType` (`MET_UCHAR` ...
+//! Read: `NDims` (1 to 4; a fourth axis is time, one frame read:
+//! [`super::ReadOptions::frame`]), `DimSize`, `ElementType` (`MET_UCHAR` ...
 //! `MET_DOUBLE`; `MET_LONG` is 4 bytes as in MetaIO), `ElementSpacing` (or
 //! `ElementSize`), `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`,
 //! `CompressedData`, `BinaryData` (False: ASCII), `HeaderSize` (bytes to
@@ -70,12 +71,15 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         .ok_or_else(|| invalid(path, "missing 'NDims'"))?
         .parse()
         .map_err(|_| invalid(path, "'NDims' is not a number"))?;
-    if !(1..=3).contains(&ndims) {
+    if !(1..=4).contains(&ndims) {
         return Err(invalid(
             path,
-            format!("NDims {ndims} is not supported (1 to 3)"),
+            format!("NDims {ndims} is not supported (1 to 4)"),
         ));
     }
+    // The axes of space: a fourth is time (ITK writes a 4D image's
+    // frames one after the other, x fastest).
+    let space = ndims.min(3);
     let sizes: Vec<usize> = get("DimSize")
         .ok_or_else(|| invalid(path, "missing 'DimSize'"))
         .and_then(|v| {
@@ -89,7 +93,11 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         ));
     }
     let mut dims = [1usize; 3];
-    dims[..ndims].copy_from_slice(&sizes);
+    dims[..space].copy_from_slice(&sizes[..space]);
+    let frames = if ndims == 4 { sizes[3] } else { 1 };
+    if frames == 0 {
+        return Err(invalid(path, "'DimSize' has 0 frames"));
+    }
     let channels_text = get("ElementNumberOfChannels").unwrap_or("1");
     let channels: usize = match channels_text.trim().parse() {
         Ok(c) if c >= 1 => c,
@@ -100,7 +108,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             ));
         }
     };
-    super::choose(path, super::Several::Frames, 1, opts)?;
+    let frame = super::choose(path, super::Several::Frames, frames, opts)?;
     let component = super::choose(path, super::Several::Components, channels, opts)?;
     let et = get("ElementType").ok_or_else(|| invalid(path, "missing 'ElementType'"))?;
     let ty = match et.to_ascii_uppercase().as_str() {
@@ -134,7 +142,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 ),
             ));
         }
-        spacing[..ndims].copy_from_slice(&s);
+        spacing[..space].copy_from_slice(&s[..space]);
     }
     let big_endian = boolean("BinaryDataByteOrderMSB")?
         .or(boolean("ElementByteOrderMSB")?)
@@ -153,10 +161,16 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             .map_err(|_| invalid(path, format!("bad 'HeaderSize': '{}'", clip(v))))?,
     };
     let n = check_dims(path, dims, ty, opts)?;
-    // Channels are interleaved (the fastest axis): all are read, one kept.
-    let stored = match dims[0].checked_mul(channels) {
-        Some(x) => check_dims(path, [x, dims[1], dims[2]], ty, opts)?,
-        None => return Err(invalid(path, format!("{channels} channels overflow"))),
+    // Channels are interleaved (the fastest axis), frames follow one
+    // another (the slowest): all are read, one of each kept.
+    let stored = match (dims[0].checked_mul(channels), dims[2].checked_mul(frames)) {
+        (Some(x), Some(z)) => check_dims(path, [x, dims[1], z], ty, opts)?,
+        _ => {
+            return Err(invalid(
+                path,
+                format!("{channels} channels of {frames} frames overflow"),
+            ));
+        }
     };
     let local = file_name.eq_ignore_ascii_case("LOCAL");
     let data_file = if local {
@@ -219,11 +233,13 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         tail: Tail::Error,
     };
     let (values, mut warnings) = read_data(path, &spec)?;
+    let values = super::select(values, n * channels, frames, frame, super::Several::Frames);
     let values = super::select(values, n, channels, component, super::Several::Components);
     let format = format!(
-        "MetaImage ({}, {}{})",
+        "MetaImage ({}, {}{}{})",
         if local { ".mha" } else { ".mhd" },
         encoding.name(),
+        super::choice_note(super::Several::Frames, frame, frames),
         super::choice_note(super::Several::Components, component, channels)
     );
     let numbers = |keys: &[&str], want: usize| -> Result<Option<Vec<f64>>, ReadError> {
@@ -243,13 +259,17 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         &["TransformMatrix", "Rotation", "Orientation"],
         ndims * ndims,
     )?;
+    // Of a 4D image's geometry, the spatial part: the first three
+    // origin numbers and the upper-left 3×3 of the 4×4 matrix.
     let mut o = [0.0; 3];
-    o[..ndims].copy_from_slice(origin.as_deref().unwrap_or(&[0.0; 3][..ndims]));
+    if let Some(origin) = &origin {
+        o[..space].copy_from_slice(&origin[..space]);
+    }
     let mut axes = Geometry::IDENTITY.direction;
     if let Some(m) = &matrix {
-        for (a, axis) in axes.iter_mut().enumerate().take(ndims) {
+        for (a, axis) in axes.iter_mut().enumerate().take(space) {
             *axis = [0.0; 3];
-            axis[..ndims].copy_from_slice(&m[a * ndims..(a + 1) * ndims]);
+            axis[..space].copy_from_slice(&m[a * ndims..a * ndims + space]);
         }
     }
     let geometry = geometry_or_warn(o, axes, Space::Lps, &mut warnings);
