@@ -59,6 +59,18 @@
 //! worse than staying. Otherwise `i` stays, and the crossings above are
 //! what [`LevelLayout::crossings`] counts.
 //!
+//! *On the shared data* (16 volumes × 3 measures, every level of 10 to
+//! 200 arcs, `tests/layout_datasets.rs`): 45 of the 48 pairs have no
+//! crossing at any of those levels; boston_teapot under height has 106
+//! over its 104 levels (at most 0.04 per arc, 7 at 200 arcs); two miss
+//! one per 20 arcs at their finest levels only: bonsai under hypervolume
+//! (21 to 25 crossings at 194 to 200 arcs, one minimum at value 0 hanging
+//! from value 28 in a maximum's branch, passed by the connectors of 21
+//! farther siblings at values 0 to 10) and boston_teapot under volume (8
+//! to 30 at 137 to 200 arcs, the same shape between values 0 and 1).
+//! With the earlier rule (sides from the full subtree's range), 18 pairs
+//! missed, up to 0.30 crossings per arc and 3 crossings at 10 arcs.
+//!
 //! **Shared saddles** (three or more arcs at one node: multi-saddles and
 //! collapsed plateaus), and saddles nearly level. Children `g_1 .. g_m`
 //! (nearest first) of one saddle `P` at value `s` on the up-going side
@@ -249,9 +261,9 @@ impl TreeLayout {
             let reaches_back = |c: BranchId| {
                 let c = c.0 as usize;
                 if branches.goes_down(BranchId(c as u32)) {
-                    r.sub_hi[c] > saddle[c]
+                    r.sub_hi[c] >= saddle[c]
                 } else {
-                    r.sub_lo[c] < saddle[c]
+                    r.sub_lo[c] <= saddle[c]
                 }
             };
             let mut moved: [Vec<BranchId>; 2] = [Vec::new(), Vec::new()];
@@ -263,11 +275,12 @@ impl TreeLayout {
                 };
                 let mut kept = Vec::with_capacity(from.len());
                 for (i, &c) in from.iter().enumerate() {
-                    let (sc, kc) = (s(c), c.0 as usize);
-                    let inside = |v: f64| lo[kc] < v && v < hi[kc];
+                    let sc = s(c);
+                    // (Closed: a fan at a saddle its subtree just touches
+                    // dips into it.)
                     let at_risk = reaches_back(c)
-                        && (from[i + 1..].iter().any(|&f| inside(s(f)))
-                            || (faces_parent(from_up) && inside(s_b)));
+                        && (from[i + 1..].iter().any(|&f| holds(c, s(f)))
+                            || (faces_parent(from_up) && holds(c, s_b)));
                     let there = &moved[usize::from(from_up)];
                     let clear = at_risk
                         && !to.iter().chain(there).any(|&d| holds(d, sc))
@@ -288,7 +301,7 @@ impl TreeLayout {
             // (A moved child's saddle differs from every other saddle on
             // its new side; a fan runs into it only in saddle order.)
             for (side, up) in [(&ups, true), (&downs, false)] {
-                fan_out(side, up, &saddle, &r, (near, tiny), &mut bend);
+                fan_out(side, up, &saddle, (&lo, &hi), &r, (near, tiny), &mut bend);
             }
             let (left, right) = if up_right { (downs, ups) } else { (ups, downs) };
             for c in &right {
@@ -448,11 +461,19 @@ fn fan_out(
     side: &[BranchId],
     up: bool,
     saddle: &[f64],
+    (lo, hi): (&[f64], &[f64]),
     r: &Ranges,
     (near, tiny): (f64, f64),
     bend: &mut [f64],
 ) {
     let sign = if up { 1.0 } else { -1.0 };
+    // Where a sibling's drawing (its whole subtree, at the finest level)
+    // begins, seen from the saddles.
+    let start = |i: usize| {
+        let k = side[i].0 as usize;
+        if up { lo[k] } else { -hi[k] }
+    };
+    let mut seen = std::collections::BTreeSet::new();
     // "Beyond s" is always "greater than s" in these signed values.
     let at = |i: usize| sign * saddle[side[i].0 as usize];
     let own_start = |i: usize| {
@@ -466,11 +487,21 @@ fn fan_out(
             last += 1;
         }
         if last > first {
-            let nearer = if first > 0 {
+            // The nearest beginning beyond the fan among nearer siblings
+            // (those reaching to it or past it cross its farthest
+            // member's horizontal connector, or touch it, anyway).
+            let nearer = seen
+                .range((ordered(at(first)).saturating_add(1), 0)..)
+                .next()
+                .map_or(f64::INFINITY, |&(_, i)| start(i) - at(first));
+            // And the next saddle nearer (its connector, when its subtree
+            // reaches past the fan).
+            let next = if first > 0 {
                 at(first - 1) - at(first)
             } else {
                 f64::INFINITY
             };
+            let nearer = if next > 0.0 { nearer.min(next) } else { nearer };
             let gap = (first..last)
                 .map(|i| own_start(i) - at(i))
                 .filter(|&d| d > 0.0)
@@ -489,8 +520,17 @@ fn fan_out(
                 bend[side[i].0 as usize] = sign * (at(i) + eps);
             }
         }
+        for i in first..=last {
+            seen.insert((ordered(start(i)), i));
+        }
         first = last + 1;
     }
+}
+
+/// A key ordering f64 values as `total_cmp` does.
+fn ordered(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 { !b } else { b | (1 << 63) }
 }
 
 /// An arc's polyline: two or three (x, value) points, upper end first.
