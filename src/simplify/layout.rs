@@ -796,11 +796,11 @@ mod tests {
             let arcs: usize = levels.iter().map(|l| l.0).sum();
             let crossings: usize = levels.iter().map(|l| l.1).sum();
             eprintln!("{n}³ noise {noise:.2} {measure}: {} levels, {crossings} crossings over {arcs} arcs drawn", levels.len());
-            // Crossings come from fans (three or more children of one
-            // saddle, common in noise) and from subtrees reaching both
-            // ways: counted and reported above, not bounded here (the
-            // goal is at most one per 20 arcs; see the report in
-            // `flexiso tree --layout`).
+            // Crossings come only from branches reaching back past an
+            // ancestor's saddle (the module doc; asserted by the test
+            // below for levels without one): counted and reported above,
+            // not bounded here (the goal is at most one per 20 arcs; see
+            // tests/layout_datasets.rs).
             prop_assert!(crossings <= arcs);
         }
     }
