@@ -240,8 +240,10 @@ impl Frame {
 /// How near an arc must be to `p` to be picked, in points.
 const PICK_TOLERANCE: f32 = 6.0;
 
-/// Arcs this much farther than the nearest still count as tied with it.
-const PICK_TIE: f32 = 2.0;
+/// Arcs this much farther than the nearest still count as tied with it
+/// (at a crossing; small enough that on a dense tree, columns a few
+/// points apart, a click on a column still picks that column).
+const PICK_TIE: f32 = 1.0;
 
 /// The arc picked at `p` among `arcs` (id, screen polyline, whether it
 /// holds a selected contour): the nearest within [`PICK_TOLERANCE`];
