@@ -220,22 +220,60 @@ struct Frame {
 }
 
 impl Frame {
-    /// The arc nearest to `p` within 6 points.
+    /// The arc nearest to `p` within 6 points; among those about as near
+    /// (at a crossing, or where arcs meet at a node), one holding a
+    /// selected contour, else the shortest on the screen
+    /// ([`nearest_arc`]).
     fn nearest(&self, p: Pos2) -> Option<SimplifiedArcId> {
-        self.segs
+        let arcs = self
+            .segs
             .iter()
             .zip(&self.paths)
             .map(|(&(id, _, _), path)| {
-                let d = path
-                    .windows(2)
-                    .map(|w| segment_distance(p, w[0], w[1]))
-                    .fold(f32::INFINITY, f32::min);
-                (d, id)
-            })
-            .filter(|(d, _)| *d <= 6.0)
-            .min_by(|x, y| x.0.total_cmp(&y.0))
-            .map(|(_, id)| id)
+                let selected = self.markers.iter().any(|m| m.arc == id);
+                (id, path.as_slice(), selected)
+            });
+        nearest_arc(p, arcs)
     }
+}
+
+/// How near an arc must be to `p` to be picked, in points.
+const PICK_TOLERANCE: f32 = 6.0;
+
+/// Arcs this much farther than the nearest still count as tied with it
+/// (at a crossing; small enough that on a dense tree, columns a few
+/// points apart, a click on a column still picks that column).
+const PICK_TIE: f32 = 1.0;
+
+/// The arc picked at `p` among `arcs` (id, screen polyline, whether it
+/// holds a selected contour): the nearest within [`PICK_TOLERANCE`];
+/// among those within [`PICK_TIE`] of the nearest, a selected one, then
+/// the shortest polyline, then the lowest id. So at a crossing, or at a
+/// node where a short arc meets a long one, the short (or selected) arc
+/// wins and stays clickable.
+fn nearest_arc<'a>(
+    p: Pos2,
+    arcs: impl Iterator<Item = (SimplifiedArcId, &'a [Pos2], bool)>,
+) -> Option<SimplifiedArcId> {
+    let near: Vec<(f32, bool, f32, SimplifiedArcId)> = arcs
+        .filter_map(|(id, path, selected)| {
+            let d = path
+                .windows(2)
+                .map(|w| segment_distance(p, w[0], w[1]))
+                .fold(f32::INFINITY, f32::min);
+            let length: f32 = path.windows(2).map(|w| w[0].distance(w[1])).sum();
+            (d <= PICK_TOLERANCE).then_some((d, selected, length, id))
+        })
+        .collect();
+    let best = near.iter().map(|a| a.0).fold(f32::INFINITY, f32::min);
+    near.into_iter()
+        .filter(|a| a.0 <= best + PICK_TIE)
+        .min_by(|x, y| {
+            y.1.cmp(&x.1)
+                .then(x.2.total_cmp(&y.2))
+                .then(x.3.0.cmp(&y.3.0))
+        })
+        .map(|a| a.3)
 }
 
 impl TreePanel {
@@ -796,5 +834,38 @@ fn draw_legend(ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) {
             text,
         );
         lx = r.right() + 10.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arc(id: u32, points: &[(f32, f32)]) -> (SimplifiedArcId, Vec<Pos2>) {
+        (
+            SimplifiedArcId(id),
+            points.iter().map(|&(x, y)| Pos2::new(x, y)).collect(),
+        )
+    }
+
+    #[test]
+    fn at_a_crossing_the_shorter_arc_wins_unless_the_longer_is_selected() {
+        // A long vertical arc and a short horizontal one crossing at (50, 50).
+        let long = arc(1, &[(50.0, 0.0), (50.0, 400.0)]);
+        let short = arc(2, &[(40.0, 50.0), (60.0, 50.0)]);
+        let pick = |p: Pos2, selected: u32| {
+            let arcs = [&long, &short]
+                .into_iter()
+                .map(|(id, path)| (*id, path.as_slice(), id.0 == selected));
+            nearest_arc(p, arcs)
+        };
+        let crossing = Pos2::new(50.5, 50.5);
+        assert_eq!(pick(crossing, 0), Some(SimplifiedArcId(2)));
+        assert_eq!(pick(crossing, 1), Some(SimplifiedArcId(1)));
+        // Away from the crossing the nearest arc wins, selected or not.
+        assert_eq!(pick(Pos2::new(51.0, 200.0), 2), Some(SimplifiedArcId(1)));
+        assert_eq!(pick(Pos2::new(41.0, 51.0), 1), Some(SimplifiedArcId(2)));
+        // Nothing within the tolerance.
+        assert_eq!(pick(Pos2::new(100.0, 200.0), 0), None);
     }
 }
