@@ -188,20 +188,25 @@ fn the_clipping_plane_cuts_away_the_side_it_faces() {
     assert!(or > ol * 3, "the right half kept: {ol} {or}");
 }
 
-#[test]
-fn picking_skips_what_the_clip_cuts_away_and_what_lies_behind_a_slice() {
-    let Some(g) = gpu() else { return };
+/// Two spheres along x, mesh 1 at x = +2 and mesh 2 at x = -2, and a
+/// camera on +x, so that mesh 1 is in front.
+fn two_spheres_seen_from_plus_x(g: &flexiso::render::Gpu) -> (flexiso::render::Renderer, Camera) {
     let mut r = g.renderer();
-    // Two spheres along x; seen from +x, the one at x = +2 is in front.
-    let (p, n, i) = icosphere([2.0, 0.0, 0.0], 0.8, 3);
-    r.set_mesh(&g.device, &g.queue, 1u64, &p, &n, &i)
-        .expect("mesh");
-    let (p, n, i) = icosphere([-2.0, 0.0, 0.0], 0.8, 3);
-    r.set_mesh(&g.device, &g.queue, 2u64, &p, &n, &i)
-        .expect("mesh");
+    for (id, x) in [(1u64, 2.0), (2u64, -2.0)] {
+        let (p, n, i) = icosphere([x, 0.0, 0.0], 0.8, 3);
+        r.set_mesh(&g.device, &g.queue, id, &p, &n, &i)
+            .expect("mesh");
+    }
     let mut c = Camera::default();
     c.fit([-3.0; 3], [3.0; 3]);
     c.set_preset(ViewPreset::PlusX);
+    (r, c)
+}
+
+#[test]
+fn picking_skips_what_the_clip_cuts_away_and_what_lies_behind_a_slice() {
+    let Some(g) = gpu() else { return };
+    let (mut r, c) = two_spheres_seen_from_plus_x(&g);
     let (w, h) = (200.0, 200.0);
     let pick = |r: &flexiso::render::Renderer| r.pick(&c, w, h, w / 2.0, h / 2.0).map(|x| x.0);
     assert_eq!(pick(&r), Some(1u64.into()), "the near sphere");
@@ -336,17 +341,7 @@ fn the_cut_away_box_opens_a_corner_onto_what_lies_inside() {
 #[test]
 fn picking_skips_what_the_cut_away_box_cuts_away() {
     let Some(g) = gpu() else { return };
-    let mut r = g.renderer();
-    // Two spheres along x; seen from +x, the one at x = +2 is in front.
-    let (p, n, i) = icosphere([2.0, 0.0, 0.0], 0.8, 3);
-    r.set_mesh(&g.device, &g.queue, 1u64, &p, &n, &i)
-        .expect("mesh");
-    let (p, n, i) = icosphere([-2.0, 0.0, 0.0], 0.8, 3);
-    r.set_mesh(&g.device, &g.queue, 2u64, &p, &n, &i)
-        .expect("mesh");
-    let mut c = Camera::default();
-    c.fit([-3.0; 3], [3.0; 3]);
-    c.set_preset(ViewPreset::PlusX);
+    let (mut r, c) = two_spheres_seen_from_plus_x(&g);
     let (w, h) = (200.0, 200.0);
     let pick = |r: &flexiso::render::Renderer| r.pick(&c, w, h, w / 2.0, h / 2.0);
     assert_eq!(pick(&r).map(|x| x.0), Some(1u64.into()), "the near sphere");

@@ -309,6 +309,12 @@ impl ContourMesh {
         // refused are asked again, round after round, until a round
         // collapses nothing.
         let mut target: Vec<u32> = (0..n as u32).collect();
+        // The triangles around clustered vertex `c`, as their corners.
+        let star = |c: u32| {
+            tris[tri_start[c as usize] as usize..tri_start[c as usize + 1] as usize]
+                .iter()
+                .map(|&t| &self.indices[3 * t as usize..3 * t as usize + 3])
+        };
         let mut link: Vec<(u32, u32)> = Vec::new();
         let (mut region, mut collapsed): (Vec<[u32; 3]>, Vec<[u32; 3]>) = (Vec::new(), Vec::new());
         let mut pending: Vec<usize> = (0..n)
@@ -320,10 +326,7 @@ impl ContourMesh {
                 let cluster = &members[member_start[r] as usize..member_start[r + 1] as usize];
                 link.clear();
                 for &c in cluster {
-                    let around =
-                        &tris[tri_start[c as usize] as usize..tri_start[c as usize + 1] as usize];
-                    for &t in around {
-                        let t = &self.indices[3 * t as usize..3 * t as usize + 3];
+                    for t in star(c) {
                         let inside = |v: u32| roots[v as usize] == r as u32;
                         if t.iter().filter(|&&v| inside(v)).count() != 1 {
                             continue;
@@ -346,10 +349,7 @@ impl ContourMesh {
                 region.clear();
                 collapsed.clear();
                 for &c in cluster {
-                    let around =
-                        &tris[tri_start[c as usize] as usize..tri_start[c as usize + 1] as usize];
-                    for &t in around {
-                        let t = &self.indices[3 * t as usize..3 * t as usize + 3];
+                    for t in star(c) {
                         let m = [0, 1, 2].map(|k| target[t[k] as usize]);
                         if m[0] == m[1] || m[1] == m[2] || m[0] == m[2] {
                             continue;
