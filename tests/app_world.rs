@@ -209,3 +209,109 @@ fn framing_and_picking_in_the_view_give_the_exported_world_coordinates() {
     }
     assert!(hits > 0, "some ray hits a contour");
 }
+
+/// `flexiso render --session` places the volume as the window does: a
+/// session saved from the window on the oriented volume renders its
+/// contour where the saved camera sees the contour's world position, not
+/// where its grid-frame position would be.
+#[test]
+fn render_session_places_the_oriented_volume_as_the_window_does() {
+    let Some(dir) = common::dataset("formats/real-tools") else {
+        return;
+    };
+    let Some(field) = oriented() else { return };
+    if common::gpu().is_none() {
+        return;
+    }
+    let file = dir.join("neghip_oriented_sitk.mha");
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .with_pixels_per_point(1.0)
+        .wgpu()
+        .build_eframe(move |_cc| FlexisoApp::new_for_test(field));
+    h.run_steps(2);
+    h.state_mut().open(file.to_str().unwrap());
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    let arcs = common::harness::arcs_by_length(&h);
+    h.state_mut().select_arc(arcs[0], true);
+    common::harness::settle(&mut h);
+    h.state_mut().selection_mut().contours[0].colour = egui::Color32::from_rgb(255, 0, 0);
+    common::harness::settle(&mut h);
+    let mesh = h.state().selection().contours[0]
+        .mesh
+        .clone()
+        .expect("a mesh");
+    let placement = h.state().view3d().placement();
+    let out = tempfile::tempdir().unwrap();
+    let path = out.path().join("s.json");
+    h.state_mut().save_session(&path).expect("saved");
+    let s = flexiso::session::Session::read(&path).unwrap();
+    let c = s.camera.expect("the camera saved");
+    let (w, ht) = (480u32, 360u32);
+    let png = out.path().join("s.png");
+    let size = format!("{w}x{ht}");
+    let run = common::flexiso(&[
+        "render",
+        "--session",
+        path.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--size",
+        &size,
+        "--no-legend",
+        "--no-labels",
+    ]);
+    assert!(run.success(), "{}", run.stderr);
+    let img = image::open(&png).unwrap().to_rgba8();
+    // Kept for a look when the test fails.
+    let _ = std::fs::copy(
+        &png,
+        std::env::temp_dir().join("flexiso-render-session-world.png"),
+    );
+    // Where the red pixels are.
+    let (mut n, mut sx, mut sy) = (0u64, 0f64, 0f64);
+    for (x, y, p) in img.enumerate_pixels() {
+        if p[0] > 120 && p[1] < 60 && p[2] < 60 {
+            n += 1;
+            sx += f64::from(x);
+            sy += f64::from(y);
+        }
+    }
+    assert!(n > 5, "the contour is in the picture ({n} red pixels)");
+    let (cx, cy) = (sx / n as f64, sy / n as f64);
+    // Where the saved camera sees the contour's box centre, placed in the
+    // world and (for contrast) left in the grid frame.
+    let (lo, hi) = bounds(std::slice::from_ref(&*mesh));
+    let grid_centre = 0.5 * (lo + hi);
+    let mut camera = flexiso::render::Camera {
+        target: c.target.into(),
+        distance: c.distance,
+        yaw: c.yaw,
+        pitch: c.pitch,
+        fov_y: c.fov_y,
+        ..Default::default()
+    };
+    camera.scene_radius = 100.0;
+    let vp = camera.view_proj(w as f32 / ht as f32);
+    let to_pixel = |p: Vec3| {
+        let q = vp * p.extend(1.0);
+        let (x, y) = (q.x / q.w, q.y / q.w);
+        (
+            f64::from((x + 1.0) * 0.5 * w as f32),
+            f64::from((1.0 - y) * 0.5 * ht as f32),
+        )
+    };
+    let world = to_pixel(placement.transform_point3(grid_centre));
+    let grid = to_pixel(grid_centre);
+    let dist = |a: (f64, f64), b: (f64, f64)| ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
+    assert!(
+        dist(world, grid) > 40.0,
+        "the test can fail: world {world:?} and grid {grid:?} project apart"
+    );
+    assert!(
+        dist((cx, cy), world) < 12.0,
+        "red pixels centred at ({cx:.0}, {cy:.0}); the world position projects to {world:?}, \
+         the grid one to {grid:?}"
+    );
+}

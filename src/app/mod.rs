@@ -414,7 +414,8 @@ impl FlexisoApp {
             self.preview = Preview::new(self.notify.clone());
             self.frame_pending.clear();
             let (min, max) = crate::render::grid_bounds(ds.field.dims(), ds.field.spacing());
-            self.view3d.set_placement(placement(&ds.field));
+            self.view3d
+                .set_placement(crate::render::placement(&ds.field));
             self.view3d.set_bounds(min, max);
             self.tree_panel.reset();
             jobs::betti::start(&mut self.betti, &ds);
@@ -1035,12 +1036,4 @@ fn spanning_superarcs(ds: &Dataset, level: &SimplifiedTree, h: f64) -> Vec<crate
     out.sort_unstable();
     out.dedup();
     out
-}
-
-/// Where the 3D view puts the grid frame: the field's world placement
-/// ([`crate::field::Geometry::affine`], the map exports use), so the view
-/// shows what `extract` writes (`--space world`).
-pub fn placement(field: &crate::field::ScalarField) -> glam::Mat4 {
-    let m = field.geometry().affine();
-    glam::Mat4::from_cols_array_2d(&m.map(|c| c.map(|x| x as f32)))
 }

@@ -218,7 +218,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let triangles: usize = surfaces.iter().map(|s| s.indices.len() / 3).sum();
     crate::report!(r, "{} contour(s), {triangles} triangles", surfaces.len());
 
+    // The grid frame, placed in the world as the window places it.
     let bounds = crate::render::grid_bounds(field.dims(), field.spacing());
+    let placement = crate::render::placement(field);
     let meshes: Vec<HeadlessMesh<'_>> = surfaces
         .iter()
         .enumerate()
@@ -237,7 +239,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         pitch: args.pitch.to_radians(),
         ..Camera::default()
     };
-    camera.fit(bounds.0, bounds.1);
+    let placed = crate::render::placed_box(placement, bounds.0, bounds.1);
+    camera.fit(placed.0, placed.1);
     if let Some(c) = session.as_ref().and_then(|(s, _)| s.camera) {
         // Fitted first for the scene's radius (near and far planes), as
         // the explorer's camera is.
@@ -251,6 +254,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         meshes,
         bounds: Some(bounds),
         camera: Some(camera),
+        placement: Some(placement),
         ..Default::default()
     };
     let mut legend = Vec::new();
@@ -304,7 +308,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         if !args.no_labels && s.view.unwrap_or_default().labels {
             let camera = scene.camera.unwrap_or_default();
-            let vp = camera.view_proj(width as f32 / height.max(1) as f32);
+            let vp = camera.view_proj(width as f32 / height.max(1) as f32) * placement;
             labels = surfaces
                 .iter()
                 .enumerate()

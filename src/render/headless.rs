@@ -84,6 +84,9 @@ pub struct HeadlessScene<'a> {
     pub clip: Option<ClipPlane>,
     /// The cut-away box.
     pub cut_box: Option<CutBox>,
+    /// The model frame's placement in the world
+    /// ([`Renderer::set_placement`]; None: the identity).
+    pub placement: Option<glam::Mat4>,
 }
 
 /// Renders `meshes` into a `width × height` image on a GPU of its own.
@@ -133,6 +136,8 @@ pub fn render_scene_to_image(
     }
     renderer.set_clip(scene.clip);
     renderer.set_cut_box(scene.cut_box);
+    let placement = scene.placement.unwrap_or(glam::Mat4::IDENTITY);
+    renderer.set_placement(placement);
     let bounds = scene.bounds;
     if let Some((lo, hi)) = bounds {
         renderer.set_bounds(lo, hi);
@@ -141,7 +146,8 @@ pub fn render_scene_to_image(
         Some(c) => c,
         None => {
             let mut c = Camera::default();
-            if let Some((lo, hi)) = bounds.or_else(|| renderer.visible_bounds()) {
+            let placed = bounds.map(|(lo, hi)| super::placed_box(placement, lo, hi));
+            if let Some((lo, hi)) = placed.or_else(|| renderer.visible_bounds()) {
                 c.fit(lo, hi);
             }
             c

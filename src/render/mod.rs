@@ -150,6 +150,15 @@ pub fn grid_bounds(dims: [usize; 3], spacing: [f64; 3]) -> ([f32; 3], [f32; 3]) 
     ([0.0; 3], [extent(0), extent(1), extent(2)])
 }
 
+/// Where the views put the grid frame: the field's world placement
+/// ([`crate::field::Geometry::affine`], the map exports use), so the
+/// window and `flexiso render` show what `extract` writes
+/// (`--space world`).
+pub fn placement(field: &crate::field::ScalarField) -> glam::Mat4 {
+    let m = field.geometry().affine();
+    glam::Mat4::from_cols_array_2d(&m.map(|c| c.map(|x| x as f32)))
+}
+
 /// What can go wrong while rendering.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
