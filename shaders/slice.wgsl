@@ -2,22 +2,7 @@
 // sRGB-encoded bytes in a plain Rgba8Unorm format, written as they are
 // (the target is Rgba8Unorm too, see mesh.wgsl).
 
-struct Frame {
-    view_proj: mat4x4<f32>,
-    eye: vec4<f32>,
-    fill_dir: vec4<f32>,
-    line_colour: vec4<f32>,
-    clip: vec4<f32>,
-    clip_on: vec4<f32>,
-    cut_lo: vec4<f32>,
-    cut_hi: vec4<f32>,
-    // The placement: model frame (meshes, box, slices, clip) to world.
-    model: mat4x4<f32>,
-    // Its inverse transpose, for normals.
-    normal_model: mat4x4<f32>,
-};
-
-@group(0) @binding(0) var<uniform> frame: Frame;
+// `Frame` and its binding `frame` come from frame.wgsl.
 @group(1) @binding(0) var image: texture_2d<f32>;
 @group(1) @binding(1) var image_sampler: sampler;
 

@@ -232,11 +232,23 @@ impl Renderer {
 
         let mesh_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("flexiso mesh.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/mesh.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("../../shaders/frame.wgsl"),
+                    include_str!("../../shaders/mesh.wgsl")
+                )
+                .into(),
+            ),
         });
         let lines_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("flexiso lines.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/lines.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("../../shaders/frame.wgsl"),
+                    include_str!("../../shaders/lines.wgsl")
+                )
+                .into(),
+            ),
         });
         let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("flexiso mesh"),
@@ -395,7 +407,13 @@ impl Renderer {
         });
         let slice_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("flexiso slice.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/slice.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("../../shaders/frame.wgsl"),
+                    include_str!("../../shaders/slice.wgsl")
+                )
+                .into(),
+            ),
         });
         let slice_pipeline_layout =
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
