@@ -10,9 +10,10 @@
 
 use egui_kittest::Harness;
 use flexiso::app::FlexisoApp;
+use flexiso::app::panels::view3d::triad_names;
 use flexiso::contour::{ContourMesh, Frame, Isovalue, all_contours};
-use flexiso::field::ScalarField;
 use flexiso::field::io::{ReadOptions, read_volume};
+use flexiso::field::{ScalarField, Space};
 use glam::Vec3;
 
 mod common;
@@ -169,8 +170,12 @@ fn framing_and_picking_in_the_view_give_the_exported_world_coordinates() {
     let world = exported(h.state(), iso);
     assert_eq!(h.state().all_contours_shown(), world.len());
 
-    // What the view draws spans the exported meshes' world box.
+    // The triad names the file's space: SimpleITK writes LPS.
     let view = h.state().view3d();
+    assert_eq!(view.context.space, Space::Lps);
+    assert_eq!(triad_names(view.context.space), ["L", "P", "S"]);
+
+    // What the view draws spans the exported meshes' world box.
     let (lo, hi) = view.renderer().unwrap().visible_bounds().unwrap();
     let (elo, ehi) = bounds(&world);
     assert!(

@@ -39,6 +39,13 @@ fn check_all(
         assert_eq!(t.non_manifold_vertices, 0, "manifold vertices");
         assert_eq!(t.misoriented_edges, 0, "consistently oriented");
         assert_eq!(t.vertices, c.positions.len(), "no unused vertex");
+        assert!(
+            c.indices
+                .chunks_exact(3)
+                .all(|tri| twice_area(c, tri) > 0.0),
+            "arc {:?} at {iso:?}: a zero-area triangle",
+            c.arc
+        );
         assert_eq!(c.normals.len(), c.positions.len());
         assert_eq!(
             t.is_closed(),
@@ -58,6 +65,15 @@ fn check_all(
             c.arc
         );
     }
+    // No two vertices at one place, within a contour or between two.
+    let mut places: Vec<[u32; 3]> = contours
+        .iter()
+        .flat_map(|c| c.positions.iter().map(|p| p.map(f32::to_bits)))
+        .collect();
+    let len = places.len();
+    places.sort_unstable();
+    places.dedup();
+    assert_eq!(places.len(), len, "at {iso:?}: two vertices at one place");
     // Seeds in any order get their own contours back, in their order.
     let seeds = PathSeeds::new();
     let reversed: Vec<PathSeed> = contours
@@ -117,6 +133,20 @@ fn check_all(
         "one contour per level-set component"
     );
     contours
+}
+
+/// Twice the area of triangle `t` of `c`, in float64.
+fn twice_area(c: &ContourMesh, t: &[u32]) -> f64 {
+    let p = |i: u32| c.positions[i as usize].map(f64::from);
+    let (a, b, d) = (p(t[0]), p(t[1]), p(t[2]));
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
 }
 
 /// The mesh's triangles as position triples, each rotated to start at its

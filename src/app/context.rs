@@ -54,6 +54,7 @@ impl FlexisoApp {
             self.view3d.context = ViewContext::default();
             return;
         };
+        let space = ds.field.geometry().space;
         self.slices.set_field(&ds.field);
         let shown: Vec<&Contour> = self
             .selection
@@ -116,6 +117,7 @@ impl FlexisoApp {
                 Vec::new()
             },
             triad: view.triad,
+            space,
         };
     }
 

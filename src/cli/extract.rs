@@ -8,8 +8,9 @@
 //! for the one spanning `H`), so pruned features are left out. The file's
 //! extension picks the format (`.ply` binary, `.obj`, `.stl`).
 //!
-//! Written meshes have the vertices a cut exactly at a vertex value puts at
-//! one place welded ([`ContourMesh::weld`]), every closed contour facing
+//! Written meshes have no zero-area triangle and no two vertices at one
+//! place, even at a data value ([`crate::contour::marching::edge_fraction`]),
+//! every closed contour facing
 //! out (positive signed volume, [`ContourMesh::orient_outward`]; open ones
 //! keep their normals downhill), and positions in world coordinates
 //! (`--space world`, the default) or voxel indices (`--space index`).
@@ -208,13 +209,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seeding * 1e6 / targets.len().max(1) as f64
     );
     contours.retain(|(_, m)| m.num_triangles() > 0);
-    // What is written: vertices cut at a vertex value welded, closed
-    // contours facing out.
-    bar.stage("weld and orient");
-    contours.par_iter_mut().for_each(|(_, m)| {
-        m.weld();
-        m.orient_outward();
-    });
+    // What is written: closed contours facing out.
+    bar.stage("orient");
+    contours
+        .par_iter_mut()
+        .for_each(|(_, m)| m.orient_outward());
     bar.done();
     contours.sort_by_key(|(t, m)| (std::cmp::Reverse(m.num_triangles()), t.lower, t.upper));
     let triangles: usize = contours.iter().map(|(_, m)| m.num_triangles()).sum();

@@ -39,7 +39,7 @@
 //! triangles' winding (see [`gradient_normals`]).
 
 pub use super::marching::{Cancelled, IdBuildHasher, IdHasher, gradient_normals, vertex_normals};
-use super::marching::{TetTables, corner};
+use super::marching::{TetTables, corner, edge_fraction};
 use super::sweep::{SweepScratch, contour_by_sweep};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
@@ -453,13 +453,9 @@ impl<'f> ContourFollower<'f> {
                         idx = out.positions.len() as u32;
                         records[owner].edge[d] = idx;
                         let (fb, fa) = (vals[b as usize], vals[a as usize]);
-                        // fa > fb or (equal values, ids ordered): s = 1/2
-                        // then, the vertex order's perturbation.
-                        let s = if fa != fb {
-                            ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
-                        } else {
-                            0.5
-                        };
+                        // fa > fb or (equal values, ids ordered), kept
+                        // inside the edge (the vertex order's perturbation).
+                        let s = edge_fraction(iso.value, fb, fa);
                         let (cb, ca) = (corner(corners[b as usize]), corner(corners[a as usize]));
                         out.positions.push(std::array::from_fn(|k| {
                             let base = t.xyz[k] as f64 + cb[k] as f64;

@@ -12,7 +12,7 @@
 
 use super::ContourMesh;
 use super::global::{follow_all, spanning_arcs};
-use super::marching::{IdBuildHasher, TetTables};
+use super::marching::{IdBuildHasher, TetTables, edge_fraction};
 use super::seed::{PathSeed, PathSeeds};
 use crate::field::{Isovalue, Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
@@ -75,11 +75,7 @@ fn march<T: Scalar>(values: &[T], field: &ScalarField, iso: Isovalue, out: &mut 
                             let next = out.positions.len() as u32;
                             let idx = *edge_vertex.entry(k).or_insert_with(|| {
                                 let (fb, fa) = (vals[b as usize], vals[a as usize]);
-                                let s = if fa != fb {
-                                    ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
-                                } else {
-                                    0.5
-                                };
+                                let s = edge_fraction(iso.value, fb, fa);
                                 let (cb, ca) = (field.coords(vb), field.coords(va));
                                 out.positions.push(std::array::from_fn(|k| {
                                     let (pb, pa) = (cb[k] as f64, ca[k] as f64);

@@ -53,7 +53,9 @@
 //! cube masks), 20 bytes per contour vertex (downhill gradient, root and
 //! label) and two dense tables of one plane per worker.
 
-use super::marching::{Cancelled, TetTables, area_normal, downhill, normalize, prefer_gradient};
+use super::marching::{
+    Cancelled, TetTables, area_normal, downhill, edge_fraction, normalize, prefer_gradient,
+};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
@@ -617,12 +619,8 @@ fn crossed_edges<T: Scalar>(
                 };
                 let (fb, fa) = (values[b].to_f64(), values[a].to_f64());
                 // As the follower: fa > fb, or equal values with ids
-                // ordered (the midpoint then, the order's perturbation).
-                let s = if fa != fb {
-                    ((iso.value - fb) / (fa - fb)).clamp(0.0, 1.0)
-                } else {
-                    0.5
-                };
+                // ordered, kept inside the edge (the order's perturbation).
+                let s = edge_fraction(iso.value, fb, fa);
                 positions[i] = std::array::from_fn(|k| {
                     let (pb, pa) = (cb[k] as f64, ca[k] as f64);
                     ((pb + s * (pa - pb)) * spacing[k]) as f32

@@ -18,6 +18,7 @@ use std::sync::Arc;
 use egui::{Color32, Sense};
 
 use crate::app::ids::ContourId;
+use crate::field::Space;
 use crate::render::overlay::LegendEntry;
 use crate::render::{
     Camera, ClipPlane, CutBox, EguiTexture, MeshId, PreparedMesh, Renderer, SliceQuad, ViewPreset,
@@ -128,12 +129,28 @@ pub struct ViewContext {
     pub legend: Vec<LegendEntry>,
     /// Draw the axis triad.
     pub triad: bool,
+    /// The space world coordinates are given in: the triad names the
+    /// anatomical direction of each axis (LPS: x left, y posterior, z
+    /// superior; RAS: right, anterior, superior) and the space.
+    pub space: Space,
 }
 
 impl ViewContext {
     /// Whether the clipping plane and the cut-away box keep `p`.
     pub fn keeps(&self, p: [f32; 3]) -> bool {
         self.clip.is_none_or(|c| c.keeps(p)) && self.cut_box.is_none_or(|b| b.keeps(p))
+    }
+}
+
+/// What the triad writes at the tips of the world's x, y and z axes: the
+/// anatomical direction each points to in `space` (LPS: left, posterior,
+/// superior; RAS: right, anterior, superior), or the axis names when the
+/// file names no space.
+pub fn triad_names(space: Space) -> [&'static str; 3] {
+    match space {
+        Space::Lps => ["L", "P", "S"],
+        Space::Ras => ["R", "A", "S"],
+        Space::Unnamed => ["x", "y", "z"],
     }
 }
 
@@ -335,10 +352,11 @@ impl View3d {
             let forward = up.cross(right);
             let centre = rect.left_bottom() + egui::vec2(44.0, -44.0);
             let len = 30.0;
+            let names = triad_names(self.context.space);
             let axes = [
-                (glam::Vec3::X, "x", Color32::from_rgb(230, 80, 70)),
-                (glam::Vec3::Y, "y", Color32::from_rgb(100, 200, 90)),
-                (glam::Vec3::Z, "z", Color32::from_rgb(90, 140, 240)),
+                (glam::Vec3::X, names[0], Color32::from_rgb(230, 80, 70)),
+                (glam::Vec3::Y, names[1], Color32::from_rgb(100, 200, 90)),
+                (glam::Vec3::Z, names[2], Color32::from_rgb(90, 140, 240)),
             ];
             let mut order: Vec<_> = axes.iter().collect();
             // Farthest first, so the nearest axis is drawn on top.
@@ -354,6 +372,15 @@ impl View3d {
                     *name,
                     egui::FontId::proportional(13.0),
                     *colour,
+                );
+            }
+            if self.context.space != Space::Unnamed {
+                painter.text(
+                    centre + egui::vec2(0.0, 40.0 + 2.0),
+                    egui::Align2::CENTER_TOP,
+                    self.context.space.name(),
+                    egui::FontId::proportional(11.0),
+                    Color32::from_gray(200),
                 );
             }
         }
