@@ -351,3 +351,78 @@ fn the_command_line_takes_frame_and_component() {
         "{json}"
     );
 }
+
+/// A legacy VTK STRUCTURED_POINTS header of `DIMS` whose point data is
+/// announced by `attribute` (the lines up to where the data starts).
+fn vtk_header(mode: &str, attribute: &str) -> String {
+    let [x, y, z] = DIMS;
+    format!(
+        "# vtk DataFile Version 3.0\nattributes\n{mode}\nDATASET STRUCTURED_POINTS\n\
+         DIMENSIONS {x} {y} {z}\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA {N}\n{attribute}\n"
+    )
+}
+
+#[test]
+fn legacy_vtk_reads_every_point_attribute_kind_by_component() {
+    let dir = tempfile::tempdir().unwrap();
+    // (attribute line, components): binary big-endian float32 and int16,
+    // and ASCII.
+    let kinds = [
+        ("VECTORS velocity float", 3),
+        ("NORMALS n float", 3),
+        ("TENSORS stress float", 9),
+        ("TEXTURE_COORDINATES uv 2 float", 2),
+        ("FIELD FieldData 2\ndensity 2 24 float", 2),
+    ];
+    for (i, (attribute, k)) in kinds.iter().enumerate() {
+        let data = interleaved(*k);
+        let mut bin = vtk_header("BINARY", attribute).into_bytes();
+        for v in &data {
+            bin.extend_from_slice(&(*v as f32).to_be_bytes());
+        }
+        let p = write(dir.path(), &format!("bin{i}.vtk"), &bin);
+        for c in [0, k - 1] {
+            assert_eq!(read_with(&p, None, Some(c)), volume_k(c), "{attribute}");
+        }
+        let e = fails_with(&p, None, None);
+        assert!(
+            e.contains(&format!("--component C (0 to {})", k - 1)),
+            "{e}"
+        );
+
+        let short = attribute.replace("float", "short");
+        let mut bin = vtk_header("BINARY", &short).into_bytes();
+        for v in &data {
+            bin.extend_from_slice(&(*v as i16).to_be_bytes());
+        }
+        let p = write(dir.path(), &format!("short{i}.vtk"), &bin);
+        assert_eq!(read_with(&p, None, Some(1)), volume_k(1), "{short}");
+
+        let text: Vec<String> = data.iter().map(|v| format!("{v}")).collect();
+        let ascii = vtk_header("ASCII", attribute) + &text.join(" ") + "\n";
+        let p = write(dir.path(), &format!("ascii{i}.vtk"), ascii.as_bytes());
+        assert_eq!(
+            read_with(&p, None, Some(k - 1)),
+            volume_k(k - 1),
+            "{attribute}"
+        );
+    }
+    // A FIELD array of other than POINT_DATA tuples, a type VTK does not
+    // name, and arrays of cells or of the dataset are refused, named.
+    let cases = [
+        (vtk_header("ASCII", "FIELD f 1\nd 1 7 float"), "7 tuples"),
+        (vtk_header("ASCII", "VECTORS v complex"), "complex"),
+    ];
+    for (i, (text, says)) in cases.iter().enumerate() {
+        let p = write(dir.path(), &format!("bad{i}.vtk"), text.as_bytes());
+        let e = fails_with(&p, None, Some(0));
+        assert!(e.contains(says), "{e}");
+    }
+    let [x, y, z] = DIMS;
+    let cells = format!(
+        "# vtk DataFile Version 3.0\nc\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS {x} {y} {z}\n\
+         SPACING 1 1 1\nORIGIN 0 0 0\nCELL_DATA 6\nVECTORS v float\n"
+    );
+    let p = write(dir.path(), "cells.vtk", cells.as_bytes());
+    assert!(fails_with(&p, None, Some(0)).contains("before POINT_DATA"));
+}

@@ -1,11 +1,17 @@
 //! VTK legacy files (`.vtk`), `DATASET STRUCTURED_POINTS` only: the first
-//! `SCALARS` or `COLOR_SCALARS` array of `POINT_DATA`, binary (big-endian,
-//! as the VTK file format specifies) or ASCII.
+//! array of `POINT_DATA`, binary (big-endian, as the VTK file format
+//! specifies) or ASCII, of any attribute kind: `SCALARS` (1 to 4
+//! components), `COLOR_SCALARS`, `VECTORS` and `NORMALS` (3),
+//! `TEXTURE_COORDINATES` (1 to 3), `TENSORS` (9), or the first array of a
+//! `FIELD` (its own number of components). An array of several components
+//! is read with `--component C`, as the other formats' vector data.
 //!
 //! The header is the lines up to the `LOOKUP_TABLE` line that follows
-//! `SCALARS` (required by the spec), or up to a `COLOR_SCALARS name 1`
-//! line (what `vtkStructuredPointsWriter` writes for uint8 data: binary
-//! bytes; in ASCII, floats in [0, 1]); binary data starts on the next byte.
+//! `SCALARS` (required by the spec), up to a `COLOR_SCALARS name 1` line
+//! (what `vtkStructuredPointsWriter` writes for uint8 data: binary bytes;
+//! in ASCII, floats in [0, 1]), up to the line naming any other attribute,
+//! or up to the first array line of a `FIELD`; binary data starts on the
+//! next byte.
 //! The grid is placed at `ORIGIN`, axis-aligned (the format has no
 //! direction), in no named space.
 //! Anything after the array (more arrays) is ignored. `DIMENSIONS`,
@@ -23,6 +29,7 @@ const MAX_HEADER: usize = 1 << 20;
 /// Reads a legacy `.vtk` file.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let mut after_scalars = false;
+    let mut after_field = false;
     let mut index = 0;
     let mut not_vtk = false;
     let (lines, data_offset) = super::read_header_lines(path, MAX_HEADER, |line| {
@@ -39,11 +46,22 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             .next()
             .unwrap_or("")
             .to_ascii_uppercase();
+        if after_field {
+            return true; // the FIELD's first array line: its data follows
+        }
         if kw == "SCALARS" {
             after_scalars = true;
             return false;
         }
-        (after_scalars && kw == "LOOKUP_TABLE") || kw == "COLOR_SCALARS"
+        if kw == "FIELD" {
+            after_field = true;
+            return false;
+        }
+        (after_scalars && kw == "LOOKUP_TABLE")
+            || matches!(
+                kw.as_str(),
+                "COLOR_SCALARS" | "VECTORS" | "NORMALS" | "TENSORS" | "TEXTURE_COORDINATES"
+            )
     })?;
     if not_vtk {
         return Err(invalid(
@@ -54,8 +72,8 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     if data_offset == usize::MAX {
         return Err(invalid(
             path,
-            "no 'SCALARS name type' followed by 'LOOKUP_TABLE' line, nor 'COLOR_SCALARS name 1': \
-             no point scalars to read",
+            "no point data array ('SCALARS name type' and 'LOOKUP_TABLE', 'COLOR_SCALARS', \
+             'VECTORS', 'NORMALS', 'TENSORS', 'TEXTURE_COORDINATES' or 'FIELD')",
         ));
     }
     let mut it = lines
@@ -80,11 +98,38 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
     let mut point_data: Option<usize> = None;
     let mut scalar_type: Option<ScalarType> = None;
     let mut components = 1usize;
+    let mut field_array = false;
     for line in it {
         let mut tok = line.split_whitespace();
         let kw = tok.next().unwrap_or("").to_ascii_uppercase();
         let rest: Vec<&str> = tok.collect();
         let bad = |what: &str| invalid(path, format!("bad {kw} line '{}': {what}", clip(line)));
+        if field_array {
+            // `arrayName numComponents numTuples dataType`.
+            let bad = |what: &str| {
+                invalid(
+                    path,
+                    format!("bad FIELD array line '{}': {what}", clip(line)),
+                )
+            };
+            let [c, tuples, ty] = rest[..] else {
+                return Err(bad("expected 'name components tuples type'"));
+            };
+            components = c
+                .parse()
+                .ok()
+                .filter(|&k: &usize| k >= 1)
+                .ok_or_else(|| bad("components must be a positive number"))?;
+            let tuples: usize = tuples.parse().map_err(|_| bad("expected a tuple count"))?;
+            if Some(tuples) != point_data {
+                return Err(bad(&format!(
+                    "{tuples} tuples, but POINT_DATA {}",
+                    point_data.unwrap_or(0)
+                )));
+            }
+            scalar_type = Some(vtk_type(path, ty)?);
+            break;
+        }
         match kw.as_str() {
             "DATASET" => {
                 let kind = rest
@@ -146,24 +191,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                 let name = rest
                     .get(1)
                     .ok_or_else(|| bad("expected 'SCALARS name type'"))?;
-                let ty = match name.to_ascii_lowercase().as_str() {
-                    "unsigned_char" => ScalarType::U8,
-                    "char" | "signed_char" => ScalarType::I8,
-                    "unsigned_short" => ScalarType::U16,
-                    "short" => ScalarType::I16,
-                    "unsigned_int" => ScalarType::U32,
-                    "int" => ScalarType::I32,
-                    "unsigned_long" | "vtktypeuint64" => ScalarType::U64,
-                    "long" | "vtktypeint64" => ScalarType::I64,
-                    "float" => ScalarType::F32,
-                    "double" => ScalarType::F64,
-                    other => {
-                        return Err(invalid(
-                            path,
-                            format!("unknown or unsupported VTK type '{}'", clip(other)),
-                        ));
-                    }
-                };
+                let ty = vtk_type(path, name)?;
                 if let Some(c) = rest.get(2) {
                     components = c
                         .parse()
@@ -187,6 +215,36 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
                     _ => ScalarType::U8,
                 });
             }
+            "VECTORS" | "NORMALS" | "TENSORS" | "TEXTURE_COORDINATES"
+                if point_data.is_some() && scalar_type.is_none() =>
+            {
+                // `VECTORS name type`, `TEXTURE_COORDINATES name dim type`.
+                let (k, ty) = match (kw.as_str(), &rest[..]) {
+                    ("TEXTURE_COORDINATES", [_, dim, ty]) => (
+                        dim.parse()
+                            .ok()
+                            .filter(|d| (1..=3).contains(d))
+                            .ok_or_else(|| bad("the dimension must be 1 to 3"))?,
+                        *ty,
+                    ),
+                    ("TEXTURE_COORDINATES", _) => return Err(bad("expected 'name dim type'")),
+                    ("TENSORS", [_, ty]) => (9, *ty),
+                    (_, [_, ty]) => (3, *ty),
+                    _ => return Err(bad("expected 'name type'")),
+                };
+                components = k;
+                scalar_type = Some(vtk_type(path, ty)?);
+            }
+            "FIELD" if point_data.is_some() && scalar_type.is_none() => {
+                let n: usize = rest
+                    .get(1)
+                    .and_then(|n| n.parse().ok())
+                    .ok_or_else(|| bad("expected 'FIELD name arrays'"))?;
+                if n == 0 {
+                    return Err(bad("a FIELD of no arrays"));
+                }
+                field_array = true;
+            }
             "FIELD"
             | "VECTORS"
             | "NORMALS"
@@ -195,7 +253,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
             | "COLOR_SCALARS" => {
                 return Err(invalid(
                     path,
-                    format!("{kw} before the point SCALARS is not supported"),
+                    format!("{kw} before POINT_DATA (cell or dataset arrays) is not supported"),
                 ));
             }
             other => {
@@ -207,7 +265,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         }
     }
     let dims = dims.ok_or_else(|| invalid(path, "missing DIMENSIONS"))?;
-    let ty = scalar_type.ok_or_else(|| invalid(path, "missing SCALARS"))?;
+    let ty = scalar_type.ok_or_else(|| invalid(path, "missing the point data array"))?;
     let n = check_dims(path, dims, ty, opts)?;
     super::choose(path, super::Several::Frames, 1, opts)?;
     let component = super::choose(path, super::Several::Components, components, opts)?;
@@ -254,6 +312,28 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Volume, ReadError> {
         return Err(invalid(path, "ORIGIN is not finite"));
     }
     Ok(finish(path, dims, spacing, values, ty, format, opts, warnings)?.placed(geometry))
+}
+
+/// The value type a VTK type name stands for.
+fn vtk_type(path: &Path, name: &str) -> Result<ScalarType, ReadError> {
+    Ok(match name.to_ascii_lowercase().as_str() {
+        "unsigned_char" => ScalarType::U8,
+        "char" | "signed_char" => ScalarType::I8,
+        "unsigned_short" => ScalarType::U16,
+        "short" => ScalarType::I16,
+        "unsigned_int" => ScalarType::U32,
+        "int" => ScalarType::I32,
+        "unsigned_long" | "vtktypeuint64" => ScalarType::U64,
+        "long" | "vtktypeint64" => ScalarType::I64,
+        "float" => ScalarType::F32,
+        "double" => ScalarType::F64,
+        other => {
+            return Err(invalid(
+                path,
+                format!("unknown or unsupported VTK type '{}'", clip(other)),
+            ));
+        }
+    })
 }
 
 fn parse_all<T: std::str::FromStr>(tokens: &[&str]) -> Option<Vec<T>> {
