@@ -122,6 +122,25 @@ fn extract_writes_ply_obj_and_stl_matching_the_printout() {
         assert_eq!(r.euler, r.predicted, "tree predicts χ of {}", r.arc);
     }
     assert_eq!(ply_counts(&ply), (verts, tris));
+    // Each contour index mapped to its arc (as printed) and isovalue.
+    let header = std::fs::read(&ply).expect("ply");
+    let header = String::from_utf8_lossy(&header[..header.len().min(1 << 16)]).into_owned();
+    let comments: Vec<&str> = header
+        .lines()
+        .filter(|l| l.starts_with("comment contour "))
+        .collect();
+    assert_eq!(comments.len(), table.len());
+    for (i, (line, r)) in comments.iter().zip(&table).enumerate() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(w[2], i.to_string(), "{line}");
+        assert_eq!(w[3], format!("arc_{}", r.arc.replace(':', "_")), "{line}");
+        assert_eq!(
+            (w[4], w[6], w[7]),
+            ("superarc", "isovalue", "0.5"),
+            "{line}"
+        );
+        assert!(w[5].parse::<u32>().is_ok(), "{line}");
+    }
 
     let (_, again) = extract(&["extract", "synthetic:32", "--iso", "0.5", "-o", &s(&obj)]);
     assert_eq!(again.len(), table.len(), "deterministic");
@@ -460,4 +479,61 @@ fn extract_writes_vtk_polydata_with_the_contour_per_triangle() {
         "counts as printed"
     );
     assert!(text.contains("Name=\"contour\"") && text.contains("Name=\"contour_names\""));
+    // Per point the value (the isovalue), per triangle the superarc, per
+    // contour its superarc and isovalue as field data: decoded.
+    let array = |name: &str| -> Vec<u8> {
+        use base64::Engine as _;
+        let at = text
+            .find(&format!("Name=\"{name}\""))
+            .unwrap_or_else(|| panic!("no array {name}"));
+        let start = at + text[at..].find('>').expect("tag ends") + 1;
+        let end = start + text[start..].find('<').expect("array ends");
+        let raw = base64::engine::general_purpose::STANDARD
+            .decode(text[start..end].trim())
+            .expect("base64");
+        let len = u64::from_le_bytes(raw[..8].try_into().expect("header")) as usize;
+        assert_eq!(len, raw.len() - 8, "{name}: the header counts the bytes");
+        raw[8..].to_vec()
+    };
+    let values: Vec<f64> = array("value")
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect();
+    assert_eq!(values.len(), verts);
+    assert!(values.iter().all(|&v| v == 0.5), "every point at h = 0.5");
+    let cell_arcs: Vec<i32> = array("arc")
+        .chunks_exact(4)
+        .map(|b| i32::from_le_bytes(b.try_into().expect("4 bytes")))
+        .collect();
+    assert_eq!(cell_arcs.len(), tris);
+    let field = |name: &str| -> Vec<String> {
+        let at = text.find(&format!("Name=\"{name}\"")).expect("field array");
+        let start = at + text[at..].find('>').expect("tag ends") + 1;
+        let end = start + text[start..].find('<').expect("array ends");
+        text[start..end]
+            .split_whitespace()
+            .map(String::from)
+            .collect()
+    };
+    let isovalues = field("contour_isovalue");
+    assert_eq!(isovalues.len(), table.len());
+    assert!(
+        isovalues.iter().all(|v| v.parse::<f64>() == Ok(0.5)),
+        "{isovalues:?}"
+    );
+    let contour_arcs: Vec<i32> = field("contour_arc")
+        .iter()
+        .map(|v| v.parse().expect("an arc id"))
+        .collect();
+    assert_eq!(contour_arcs.len(), table.len());
+    let contour_of: Vec<i32> = array("contour")
+        .chunks_exact(4)
+        .map(|b| i32::from_le_bytes(b.try_into().expect("4 bytes")))
+        .collect();
+    for (c, a) in contour_of.iter().zip(&cell_arcs) {
+        assert_eq!(
+            contour_arcs[*c as usize], *a,
+            "a triangle's arc is its contour's"
+        );
+    }
 }

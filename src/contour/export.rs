@@ -1,8 +1,14 @@
 //! Writing contours to files: binary little-endian PLY, Wavefront OBJ (one
 //! `o` object per contour, with normals), binary STL (triangles only,
-//! facet normals) and VTK XML PolyData (`.vtp`: the contour index per
-//! triangle as cell data, the names as field data). The format follows the
+//! facet normals) and VTK XML PolyData (`.vtp`). The format follows the
 //! file's extension.
+//!
+//! VTP: per point the normal (`Normals`) and the value of the field there
+//! (`value`: the contour's isovalue); per triangle the index of its
+//! contour (`contour`, the active scalars) and its superarc (`arc`: the
+//! index into the tree JSON's top-level `arcs`); as field data, per
+//! contour index its name (`contour_names`), superarc (`contour_arc`) and
+//! isovalue (`contour_isovalue`), and the note (`note`).
 //!
 //! PLY: each vertex carries its normal, a colour (`red green blue`, one
 //! per contour) and the index of its contour (`int contour`); faces carry
@@ -10,9 +16,10 @@
 //! common readers understand: meshio reads per-face properties of binary
 //! PLY wrongly (it takes them as whole columns), VTK's reader drops unknown
 //! face properties but shows vertex colours, trimesh keeps both. A
-//! `comment contour I NAME` line per contour maps each index to its
-//! object (e.g. `arc_UPPER_LOWER`), and the note (isovalue, space) is a
-//! comment too.
+//! `comment contour I NAME superarc A isovalue H` line per contour maps each
+//! index to its object (e.g. `arc_UPPER_LOWER`), its superarc (the index
+//! into the tree JSON's `arcs`) and its isovalue, and the note (space,
+//! command) is a comment too.
 
 use super::ContourMesh;
 use std::borrow::Borrow;
@@ -153,10 +160,8 @@ fn vtk_array(
     )
 }
 
-/// VTK XML PolyData, binary (base64 inline): points with normals
-/// (`Normals`), triangles with the index of their contour (cell data
-/// `contour`), and field data naming each index's object (`contour_names`,
-/// a string array) and the note (`note`).
+/// VTK XML PolyData, binary (base64 inline; see the module doc for the
+/// arrays).
 pub fn write_vtp(
     w: &mut impl Write,
     contours: &[impl Borrow<ContourMesh>],
@@ -210,13 +215,40 @@ pub fn write_vtp(
         "<Array type=\"String\" Name=\"note\" NumberOfTuples=\"1\" format=\"ascii\">{}</Array>",
         strings(&[note.to_owned()])
     )?;
+    let numbers = |name: &str, ty: &str, items: Vec<String>| {
+        format!(
+            "<Array type=\"{ty}\" Name=\"{name}\" NumberOfTuples=\"{}\" format=\"ascii\">{}</Array>",
+            items.len(),
+            items.join(" ")
+        )
+    };
+    let meshes = || contours.iter().map(|c| c.borrow());
+    writeln!(
+        w,
+        "{}",
+        numbers(
+            "contour_arc",
+            "Int32",
+            meshes().map(|c| c.arc.0.to_string()).collect()
+        )
+    )?;
+    writeln!(
+        w,
+        "{}",
+        numbers(
+            "contour_isovalue",
+            "Float64",
+            meshes().map(|c| format!("{:e}", c.isovalue)).collect()
+        )
+    )?;
     writeln!(w, "</FieldData>")?;
     writeln!(
         w,
         "<Piece NumberOfPoints=\"{nv}\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"{nf}\">"
     )?;
-    let (mut points, mut normals) = (Vec::new(), Vec::new());
-    let (mut connectivity, mut offsets, mut ids) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut points, mut normals, mut values) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut connectivity, mut offsets) = (Vec::new(), Vec::new());
+    let (mut ids, mut arcs) = (Vec::new(), Vec::new());
     let mut base = 0i64;
     for (i, c) in contours.iter().enumerate() {
         let c = c.borrow();
@@ -225,6 +257,7 @@ pub fn write_vtp(
                 .for_each(|x| points.extend_from_slice(&x.to_le_bytes()));
             n.iter()
                 .for_each(|x| normals.extend_from_slice(&x.to_le_bytes()));
+            values.extend_from_slice(&c.isovalue.to_le_bytes());
         }
         for t in c.indices.chunks_exact(3) {
             for &v in t {
@@ -232,14 +265,17 @@ pub fn write_vtp(
             }
             offsets.extend_from_slice(&((connectivity.len() / 8) as i64).to_le_bytes());
             ids.extend_from_slice(&(i as i32).to_le_bytes());
+            arcs.extend_from_slice(&(c.arc.0 as i32).to_le_bytes());
         }
         base += c.positions.len() as i64;
     }
-    writeln!(w, "<PointData Normals=\"Normals\">")?;
+    writeln!(w, "<PointData Normals=\"Normals\" Scalars=\"value\">")?;
     vtk_array(w, "Float32", "Normals", 3, &normals)?;
+    vtk_array(w, "Float64", "value", 1, &values)?;
     writeln!(w, "</PointData>")?;
     writeln!(w, "<CellData Scalars=\"contour\">")?;
     vtk_array(w, "Int32", "contour", 1, &ids)?;
+    vtk_array(w, "Int32", "arc", 1, &arcs)?;
     writeln!(w, "</CellData>")?;
     writeln!(w, "<Points>")?;
     vtk_array(w, "Float32", "Points", 3, &points)?;
@@ -297,7 +333,11 @@ pub fn write_ply_coloured(
             .cloned()
             .unwrap_or_else(|| format!("contour_{i}"));
         let name: String = name.chars().filter(|c| !c.is_control()).collect();
-        comments += &format!("comment contour {i} {name}\n");
+        let c = contours[i].borrow();
+        comments += &format!(
+            "comment contour {i} {name} superarc {} isovalue {}\n",
+            c.arc.0, c.isovalue
+        );
     }
     write!(
         w,
@@ -509,6 +549,7 @@ mod coloured_tests {
     fn triangle() -> ContourMesh {
         ContourMesh {
             arc: crate::tree::ArcId(0),
+            isovalue: 1.0,
             positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             normals: vec![[0.0, 0.0, 1.0]; 3],
             indices: vec![0, 1, 2],

@@ -232,7 +232,7 @@ impl<'f> ContourFollower<'f> {
         match self.follow_within(seed, iso, usize::MAX, &|| false) {
             Ok(Some(mesh)) => mesh,
             // Neither a limit nor a cancel check to stop it.
-            _ => ContourMesh::empty(seed.arc),
+            _ => ContourMesh::empty(seed.arc, iso.value),
         }
     }
 
@@ -290,7 +290,7 @@ impl<'f> ContourFollower<'f> {
             // Beyond the sweep's u32 ids: the flood has no such limit.
             None => Ok(self
                 .follow_within(seed, iso, usize::MAX, cancel)?
-                .unwrap_or_else(|| ContourMesh::empty(seed.arc))),
+                .unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value))),
         }
     }
 
@@ -303,7 +303,7 @@ impl<'f> ContourFollower<'f> {
         limit: usize,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<Option<ContourMesh>, Cancelled> {
-        let mut out = ContourMesh::empty(seed.arc);
+        let mut out = ContourMesh::empty(seed.arc, iso.value);
         if self.dims.iter().any(|&d| d < 2) {
             return Ok(Some(out));
         }

@@ -88,6 +88,8 @@ pub enum Frame {
 pub struct ContourMesh {
     /// The superarc whose contour this is.
     pub arc: ArcId,
+    /// The isovalue it was extracted at (the value of its cut).
+    pub isovalue: f64,
     /// Vertex positions, one per crossed mesh edge.
     pub positions: Vec<[f32; 3]>,
     /// Unit vertex normals, pointing towards lower values.
@@ -100,10 +102,11 @@ pub struct ContourMesh {
 }
 
 impl ContourMesh {
-    /// An empty contour of `arc`.
-    pub fn empty(arc: ArcId) -> Self {
+    /// An empty contour of `arc` at `isovalue`.
+    pub fn empty(arc: ArcId, isovalue: f64) -> Self {
         Self {
             arc,
+            isovalue,
             positions: Vec::new(),
             normals: Vec::new(),
             indices: Vec::new(),

@@ -39,7 +39,7 @@ pub fn all_contours_by_following(
 /// same case tables, interpolation and vertex sharing as contour following.
 /// O(volume): the tests' oracle, not the explorer's path.
 pub fn marching_tetrahedra(field: &ScalarField, iso: Isovalue) -> ContourMesh {
-    let mut out = ContourMesh::empty(ArcId(0));
+    let mut out = ContourMesh::empty(ArcId(0), iso.value);
     let dims = field.dims();
     if dims.iter().any(|&d| d < 2) {
         return out;

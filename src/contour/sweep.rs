@@ -325,15 +325,17 @@ fn sweep<T: Scalar>(
     }
     let arcs: Vec<ArcId> = arc_of.into_iter().collect::<Option<_>>()?;
     Some(split_components(
-        arcs, &label, parent, positions, normals, indices, &on_face,
+        arcs, iso.value, &label, parent, positions, normals, indices, &on_face,
     ))
 }
 
 /// The meshes of the components: each contour's vertices in id order, its
 /// triangles in sweep order. The largest is compacted in place in the
 /// sweep's arrays (whose memory it then keeps), the others copied out.
+#[allow(clippy::too_many_arguments)]
 fn split_components(
     arcs: Vec<ArcId>,
+    isovalue: f64,
     label: &[u32],
     mut local: Vec<u32>,
     mut positions: Vec<[f32; 3]>,
@@ -346,7 +348,10 @@ fn split_components(
         count[c as usize] += 1;
     }
     let largest = (0..arcs.len()).max_by_key(|&c| count[c]).unwrap_or(0) as u32;
-    let mut out: Vec<ContourMesh> = arcs.iter().map(|&a| ContourMesh::empty(a)).collect();
+    let mut out: Vec<ContourMesh> = arcs
+        .iter()
+        .map(|&a| ContourMesh::empty(a, isovalue))
+        .collect();
     let mut kept = 0;
     for i in 0..label.len() {
         let c = label[i];
@@ -1037,6 +1042,7 @@ fn sweep_one<T: Scalar>(
         });
     Ok(Some(ContourMesh {
         arc: seed.arc,
+        isovalue: iso.value,
         positions,
         normals,
         indices,

@@ -650,6 +650,7 @@ mod tests {
         let (positions, normals, indices) = crate::render::icosphere([7.5; 3], 4.0, 3);
         let mesh = ContourMesh {
             arc: crate::tree::ArcId(0),
+            isovalue: 0.5,
             positions,
             normals,
             indices,
