@@ -327,13 +327,13 @@ pub fn write_ply_coloured(
     if !note.is_empty() {
         comments += &format!("comment {note}\n");
     }
-    for i in 0..contours.len() {
+    for (i, c) in contours.iter().enumerate() {
         let name = names
             .get(i)
             .cloned()
             .unwrap_or_else(|| format!("contour_{i}"));
         let name: String = name.chars().filter(|c| !c.is_control()).collect();
-        let c = contours[i].borrow();
+        let c = c.borrow();
         comments += &format!(
             "comment contour {i} {name} superarc {} isovalue {}\n",
             c.arc.0, c.isovalue
