@@ -668,10 +668,11 @@ impl TreePanel {
         }
     }
 
-    /// Values beside the important nodes ([`important_nodes`]), placed
-    /// by [`place_labels`] clear of each other, the node dots, the
-    /// markers and their names, the legend and the isovalue's label;
-    /// what does not fit is left out. What was drawn.
+    /// Values beside the important nodes ([`important_nodes`]), each
+    /// value once, placed by [`place_labels`] clear of each other, the
+    /// node dots, the arcs, the markers and their names, the legend and
+    /// the isovalue's label; what does not fit is left out. What was
+    /// drawn.
     #[allow(clippy::too_many_arguments)]
     fn draw_value_labels(
         &self,
@@ -685,11 +686,18 @@ impl TreePanel {
     ) -> Vec<(SimplifiedNodeId, Rect, String)> {
         let sim = level.simplification();
         let font = egui::FontId::monospace(VALUE_LABEL_SIZE);
-        let nodes = important_nodes(ds.layout.branches(), level, 3 * MAX_VALUE_LABELS);
-        let texts: Vec<String> = nodes
-            .iter()
-            .map(|&n| fmt_value(sim.node_value(n)))
-            .collect();
+        // A value already labelled is not repeated (many maxima of an
+        // 8-bit volume sit at 255).
+        let mut nodes = important_nodes(ds.layout.branches(), level, 3 * MAX_VALUE_LABELS);
+        let mut texts: Vec<String> = Vec::with_capacity(nodes.len());
+        nodes.retain(|&n| {
+            let t = fmt_value(sim.node_value(n));
+            let new = !texts.contains(&t);
+            if new {
+                texts.push(t);
+            }
+            new
+        });
         let colour = ui.visuals().text_color().gamma_multiply(0.85);
         let galleys: Vec<_> = texts
             .iter()
@@ -701,11 +709,17 @@ impl TreePanel {
             .map(|(&n, g)| (self.node_pos(&frame.tf, level, n), g.size()))
             .collect();
         // What a label must keep clear of: every labelled node's dot, the
-        // markers and their names, the legend, the isovalue's label.
+        // arcs (a label never hides the tree), the markers and their
+        // names, the legend, the isovalue's label.
         let mut obstacles: Vec<Rect> = anchors
             .iter()
             .map(|&(p, _)| Rect::from_center_size(p, vec2(8.0, 8.0)))
             .collect();
+        for path in &frame.paths {
+            for w in path.windows(2) {
+                obstacles.push(Rect::from_two_pos(w[0], w[1]).expand(1.5));
+            }
+        }
         obstacles.push(legend.expand(2.0));
         obstacles.push(iso_label.expand(2.0));
         for m in &frame.markers {
@@ -727,11 +741,9 @@ impl TreePanel {
             pos2(frame.rect.right() - 2.0, frame.rect.bottom() - 2.0),
         );
         let placed = place_labels(&anchors, &obstacles, bounds, MAX_VALUE_LABELS);
-        let bg = ui.visuals().extreme_bg_color.gamma_multiply(0.85);
         placed
             .into_iter()
             .map(|(i, r)| {
-                painter.rect_filled(r.expand(1.0), 2.0, bg);
                 painter.galley(r.min, galleys[i].clone(), colour);
                 (nodes[i], r, texts[i].clone())
             })
