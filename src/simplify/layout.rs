@@ -347,9 +347,9 @@ impl TreeLayout {
                         kept.push(c);
                         continue;
                     }
-                    if !to.iter().chain(&beyond[other]).any(|&d| holds(d, sc))
-                        && !(faces_parent(!from_up) && holds(c, s_b))
-                    {
+                    let there_meets = to.iter().chain(&beyond[other]).any(|&d| holds(d, sc));
+                    let b_meets = faces_parent(!from_up) && holds(c, s_b);
+                    if !(there_meets || b_meets) {
                         beyond[other].push(c);
                         continue;
                     }
@@ -448,10 +448,8 @@ impl TreeLayout {
                     }
                     let (a, _) = signed(c, from_up);
                     let passer = reach < sc;
-                    let clear = passer
-                        && !saddle_in(c)
-                        && !(faces_parent(!from_up) && holds(c, s_b))
-                        && !(m_reach <= sc || m_touch);
+                    let b_meets = faces_parent(!from_up) && holds(c, s_b);
+                    let clear = passer && !(saddle_in(c) || b_meets || m_reach <= sc || m_touch);
                     let (r, p) = if clear {
                         nearest[other].push(c);
                         if sc == at && !strictly_beyond(c, from_up) {
@@ -483,8 +481,7 @@ impl TreeLayout {
                 fan_out(
                     moved,
                     !up,
-                    &saddle,
-                    (&lo, &hi),
+                    (&saddle, &lo, &hi),
                     &r,
                     (near, tiny),
                     &[],
@@ -493,8 +490,7 @@ impl TreeLayout {
                 fan_out(
                     side,
                     up,
-                    &saddle,
-                    (&lo, &hi),
+                    (&saddle, &lo, &hi),
                     &r,
                     (near, tiny),
                     moved,
@@ -660,8 +656,7 @@ impl TreeLayout {
 fn fan_out(
     side: &[BranchId],
     up: bool,
-    saddle: &[f64],
-    (lo, hi): (&[f64], &[f64]),
+    (saddle, lo, hi): (&[f64], &[f64], &[f64]),
     r: &Ranges,
     (near, tiny): (f64, f64),
     prior: &[BranchId],
