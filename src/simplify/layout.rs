@@ -107,9 +107,10 @@
 //! their own saddle no higher than `f`'s top (`f`'s connector would
 //! cross them wherever it went among those blocks), all measured at the
 //! finest level. None of those is shown at 200 arcs or fewer (the most
-//! important is pruned before that level), so moving the `f`s nearest
-//! on the down side would clear every level the test checks and cross
-//! hundreds of branches at the fine ones. Which levels matter is the
+//! important is pruned before that level), so, by these counts (not
+//! tried), moving the `f`s nearest on the down side would clear every
+//! level the test checks and cross hundreds of branches at the fine
+//! ones. Which levels matter is the
 //! pruning order, which this layout never reads (see "Across
 //! measures"): a rule that read it would break the guarantee there. So
 //! the layout keeps them, and the pair stays listed in
