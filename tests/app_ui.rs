@@ -995,3 +995,30 @@ fn fitting_frames_the_whole_box_in_a_narrow_view() {
         }
     }
 }
+
+#[test]
+fn the_tree_panel_labels_important_values_clear_of_each_other_and_the_markers() {
+    let (mut h, _) = explorer();
+    let (_, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let app = h.state();
+    let drawn = &app.tree_panel().drawn;
+    let labels = &drawn.value_labels;
+    assert!(!labels.is_empty(), "some values labelled");
+    assert!(labels.len() <= flexiso::app::panels::tree::MAX_VALUE_LABELS);
+    let sim = app.level().expect("a level").simplification();
+    for (k, (n, r, text)) in labels.iter().enumerate() {
+        assert_eq!(*text, flexiso::app::format::fmt_value(sim.node_value(*n)));
+        assert!(
+            labels[k + 1..].iter().all(|(_, q, _)| !q.intersects(*r)),
+            "label {text} overlaps another"
+        );
+        for (_, m) in &drawn.markers {
+            assert!(
+                !r.intersects(egui::Rect::from_center_size(*m, egui::vec2(14.0, 14.0))),
+                "label {text} on a marker"
+            );
+        }
+        assert!(drawn.rect.expect("drawn").contains_rect(*r));
+    }
+}

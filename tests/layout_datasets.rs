@@ -24,11 +24,12 @@ const MOST: usize = 200;
 /// one crossing per 3 arcs instead, a guard against regressions, and the
 /// levels missing the floor are printed. Before children were sided by
 /// their own direction, 18 of the 48 pairs were listed here (worst
-/// 0.30 crossings per arc, tooth, with 3 crossings at 10 arcs).
-const BELOW_FLOOR: &[(&str, &str)] = &[
-    ("bonsai.nrrd", "hypervolume"),
-    ("boston_teapot.nrrd", "volume"),
-];
+/// 0.30 crossings per arc, tooth, with 3 crossings at 10 arcs);
+/// boston_teapot under volume left when children reaching back learned
+/// to jump past their passers. Why bonsai under hypervolume stays: the
+/// layout's module doc, "Why bonsai under hypervolume keeps its
+/// crossings".
+const BELOW_FLOOR: &[(&str, &str)] = &[("bonsai.nrrd", "hypervolume")];
 
 /// Per level checked: (arcs, crossings), after asserting no overlaps.
 fn check_levels(name: &str, sim: &Arc<Simplification>) -> Vec<(usize, usize)> {

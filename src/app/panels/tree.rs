@@ -62,6 +62,9 @@ pub struct Drawn {
     pub markers: Vec<(ContourId, Pos2)>,
     /// Screen y of the global isovalue line.
     pub iso_y: f32,
+    /// Value labels drawn beside important nodes: node, the label's
+    /// screen rect, its text.
+    pub value_labels: Vec<(SimplifiedNodeId, Rect, String)>,
 }
 
 /// The tree panel's own state (view transform, drag, caches).
@@ -340,9 +343,11 @@ impl TreePanel {
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
         self.draw_axis(ui, &painter, &frame);
-        let iso_y = self.draw_iso_line(&painter, &frame, *global_h);
+        let (iso_y, iso_label) = self.draw_iso_line(&painter, &frame, *global_h);
         self.draw_tree(&painter, &frame, level, sel);
-        draw_legend(ui, &painter, &frame);
+        let legend = draw_legend(ui, &painter, &frame);
+        let value_labels =
+            self.draw_value_labels(ui, &painter, &frame, ds, level, sel, (legend, iso_label));
         if let Some(a) = self.hovered
             && self.drag.is_none()
         {
@@ -363,6 +368,7 @@ impl TreePanel {
             arc_ends: segs.iter().map(|&(_, a, b)| (a, b)).collect(),
             markers: frame.markers.iter().map(|m| (m.id, m.pos)).collect(),
             iso_y,
+            value_labels,
         };
     }
 
@@ -580,8 +586,9 @@ impl TreePanel {
         }
     }
 
-    /// The global isovalue as a dashed line with its value; its screen y.
-    fn draw_iso_line(&self, painter: &egui::Painter, frame: &Frame, global_h: f64) -> f32 {
+    /// The global isovalue as a dashed line with its value; its screen y
+    /// and the rect of its value's label.
+    fn draw_iso_line(&self, painter: &egui::Painter, frame: &Frame, global_h: f64) -> (f32, Rect) {
         let (rect, plot) = (frame.rect, frame.plot);
         let iso_y = frame.tf.screen(0.0, global_h).y;
         let dash = Stroke::new(
@@ -598,14 +605,14 @@ impl TreePanel {
             6.0,
             4.0,
         ));
-        painter.text(
+        let label = painter.text(
             pos2(rect.right() - 4.0, iso_y - 2.0),
             egui::Align2::RIGHT_BOTTOM,
             format!("h = {}", fmt_value(global_h)),
             egui::FontId::monospace(10.0),
             ISO_COLOUR,
         );
-        iso_y
+        (iso_y, label)
     }
 
     /// Arcs (selected ones in their contour's colour), nodes by kind, and
@@ -654,11 +661,93 @@ impl TreePanel {
                     m.pos + vec2(10.0, 0.0),
                     egui::Align2::LEFT_CENTER,
                     &c.name,
-                    egui::FontId::proportional(12.0),
+                    egui::FontId::proportional(MARKER_NAME_SIZE),
                     m.colour,
                 );
             }
         }
+    }
+
+    /// Values beside the important nodes ([`important_nodes`]), each
+    /// value once, placed by [`place_labels`] clear of each other, the
+    /// node dots, the arcs, the markers and their names, the legend and
+    /// the isovalue's label; what does not fit is left out. What was
+    /// drawn.
+    #[allow(clippy::too_many_arguments)]
+    fn draw_value_labels(
+        &self,
+        ui: &egui::Ui,
+        painter: &egui::Painter,
+        frame: &Frame,
+        ds: &Dataset,
+        level: &SimplifiedTree,
+        sel: &Selection,
+        (legend, iso_label): (Rect, Rect),
+    ) -> Vec<(SimplifiedNodeId, Rect, String)> {
+        let sim = level.simplification();
+        let font = egui::FontId::monospace(VALUE_LABEL_SIZE);
+        // A value already labelled is not repeated (many maxima of an
+        // 8-bit volume sit at 255).
+        let mut nodes = important_nodes(ds.layout.branches(), level, 3 * MAX_VALUE_LABELS);
+        let mut texts: Vec<String> = Vec::with_capacity(nodes.len());
+        nodes.retain(|&n| {
+            let t = fmt_value(sim.node_value(n));
+            let new = !texts.contains(&t);
+            if new {
+                texts.push(t);
+            }
+            new
+        });
+        let colour = ui.visuals().text_color().gamma_multiply(0.85);
+        let galleys: Vec<_> = texts
+            .iter()
+            .map(|t| painter.layout_no_wrap(t.clone(), font.clone(), colour))
+            .collect();
+        let anchors: Vec<(Pos2, Vec2)> = nodes
+            .iter()
+            .zip(&galleys)
+            .map(|(&n, g)| (self.node_pos(&frame.tf, level, n), g.size()))
+            .collect();
+        // What a label must keep clear of: every labelled node's dot, the
+        // arcs (a label never hides the tree), the markers and their
+        // names, the legend, the isovalue's label.
+        let mut obstacles: Vec<Rect> = anchors
+            .iter()
+            .map(|&(p, _)| Rect::from_center_size(p, vec2(8.0, 8.0)))
+            .collect();
+        for path in &frame.paths {
+            for w in path.windows(2) {
+                obstacles.push(Rect::from_two_pos(w[0], w[1]).expand(1.5));
+            }
+        }
+        obstacles.push(legend.expand(2.0));
+        obstacles.push(iso_label.expand(2.0));
+        for m in &frame.markers {
+            obstacles.push(Rect::from_center_size(m.pos, vec2(16.0, 16.0)));
+            if let Some(c) = sel.get(m.id)
+                && !c.name.is_empty()
+            {
+                let g = painter.layout_no_wrap(
+                    c.name.clone(),
+                    egui::FontId::proportional(MARKER_NAME_SIZE),
+                    m.colour,
+                );
+                obstacles.push(marker_name_rect(m.pos, g.size()).expand(2.0));
+            }
+        }
+        // Inside the plot, never in the legend's strip above it.
+        let bounds = Rect::from_min_max(
+            pos2(frame.plot.left() - 6.0, frame.plot.top() - 8.0),
+            pos2(frame.rect.right() - 2.0, frame.rect.bottom() - 2.0),
+        );
+        let placed = place_labels(&anchors, &obstacles, bounds, MAX_VALUE_LABELS);
+        placed
+            .into_iter()
+            .map(|(i, r)| {
+                painter.galley(r.min, galleys[i].clone(), colour);
+                (nodes[i], r, texts[i].clone())
+            })
+            .collect()
     }
 
     /// What the tooltip of arc `a` says: its values, costs, and the genus
@@ -814,12 +903,13 @@ impl TreePanel {
     }
 }
 
-/// The node colours' legend, above the plot.
-fn draw_legend(ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) {
+/// The node colours' legend, above the plot; the rect it covers.
+fn draw_legend(ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) -> Rect {
     let text = ui.visuals().text_color();
     let font = egui::FontId::monospace(10.0);
     let mut lx = frame.plot.left();
     let y = frame.rect.top() + 7.0;
+    let mut covered = Rect::from_center_size(pos2(lx, y), vec2(7.0, 7.0));
     for (name, c) in [
         ("max", MAX_COLOUR),
         ("min", MIN_COLOUR),
@@ -833,13 +923,173 @@ fn draw_legend(ui: &egui::Ui, painter: &egui::Painter, frame: &Frame) {
             font.clone(),
             text,
         );
+        covered = covered.union(r);
         lx = r.right() + 10.0;
     }
+    covered
+}
+
+/// At most this many value labels in the tree panel.
+pub const MAX_VALUE_LABELS: usize = 12;
+
+/// Font size of the value labels (the axis's is 10).
+const VALUE_LABEL_SIZE: f32 = 9.5;
+
+/// Font size of a marker's name.
+const MARKER_NAME_SIZE: f32 = 12.0;
+
+/// Where a marker's name is drawn: left-aligned 10 points right of it,
+/// centred on it.
+fn marker_name_rect(marker: Pos2, size: Vec2) -> Rect {
+    Rect::from_min_size(marker + vec2(10.0, -0.5 * size.y), size)
+}
+
+/// The live nodes worth a value label at `level`, most important first
+/// and without repeats, at most `most`: the ends of the root branches
+/// (the tree's global extrema when it is one arc), then the tip and the
+/// saddle of each live branch in the order of the branch decomposition
+/// (pruned last first, [`crate::simplify::branches`]).
+pub fn important_nodes(
+    branches: &crate::simplify::branches::Branches,
+    level: &SimplifiedTree,
+    most: usize,
+) -> Vec<SimplifiedNodeId> {
+    use crate::simplify::branches::BranchId;
+    let sim = level.simplification();
+    let mut out: Vec<SimplifiedNodeId> = Vec::new();
+    let push = |n: SimplifiedNodeId, out: &mut Vec<SimplifiedNodeId>| {
+        if out.len() < most && !out.contains(&n) {
+            out.push(n);
+        }
+    };
+    // The roots' ends: each root branch's live nodes' highest and lowest.
+    let nodes = level.nodes();
+    for r in branches.roots() {
+        let on: Vec<SimplifiedNodeId> = nodes
+            .iter()
+            .copied()
+            .filter(|&n| branches.of_node(n) == r)
+            .collect();
+        let by_value = |a: &&SimplifiedNodeId, b: &&SimplifiedNodeId| {
+            sim.node_value(**a).total_cmp(&sim.node_value(**b))
+        };
+        if let Some(&top) = on.iter().max_by(by_value) {
+            push(top, &mut out);
+        }
+        if let Some(&bottom) = on.iter().min_by(by_value) {
+            push(bottom, &mut out);
+        }
+    }
+    let step = level.step();
+    for k in (step..branches.steps()).rev() {
+        if out.len() >= most {
+            break;
+        }
+        let b = BranchId(k as u32);
+        for n in [branches.tip(b), branches.attachment(b)]
+            .into_iter()
+            .flatten()
+        {
+            push(n, &mut out);
+        }
+    }
+    out
+}
+
+/// Places labels of the given sizes beside their anchors, in the order
+/// given (most important first): each at the first of right of, left
+/// of, above or below its anchor that lies inside `bounds` and overlaps
+/// neither an obstacle nor a label placed before it; one that fits
+/// nowhere is left out, and at most `most` are placed. Returns (index,
+/// rect) of the placed ones, in order.
+pub fn place_labels(
+    anchors: &[(Pos2, Vec2)],
+    obstacles: &[Rect],
+    bounds: Rect,
+    most: usize,
+) -> Vec<(usize, Rect)> {
+    const GAP: f32 = 6.0;
+    let mut placed: Vec<(usize, Rect)> = Vec::new();
+    for (i, &(p, size)) in anchors.iter().enumerate() {
+        if placed.len() >= most {
+            break;
+        }
+        let options = [
+            Rect::from_min_size(pos2(p.x + GAP, p.y - 0.5 * size.y), size),
+            Rect::from_min_size(pos2(p.x - GAP - size.x, p.y - 0.5 * size.y), size),
+            Rect::from_min_size(pos2(p.x - 0.5 * size.x, p.y - GAP - size.y), size),
+            Rect::from_min_size(pos2(p.x - 0.5 * size.x, p.y + GAP), size),
+        ];
+        let free = |r: &Rect| {
+            bounds.contains_rect(*r)
+                && !obstacles.iter().any(|o| o.intersects(*r))
+                && !placed.iter().any(|(_, q)| q.intersects(*r))
+        };
+        if let Some(r) = options.into_iter().find(free) {
+            placed.push((i, r));
+        }
+    }
+    placed
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn value_labels_never_overlap_each_other_or_obstacles_and_are_at_most_n() {
+        let bounds = Rect::from_min_max(pos2(0.0, 0.0), pos2(400.0, 300.0));
+        let size = vec2(30.0, 10.0);
+        // Nodes crowded in a corner and spread out, a legend-like strip
+        // and a marker name in the middle.
+        let mut anchors = Vec::new();
+        let mut seed = 7u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            (seed >> 16) as f32 / 65_536.0
+        };
+        for _ in 0..40 {
+            anchors.push((pos2(20.0 + 60.0 * next(), 20.0 + 40.0 * next()), size));
+        }
+        for _ in 0..40 {
+            anchors.push((pos2(400.0 * next(), 300.0 * next()), size));
+        }
+        let obstacles = [
+            Rect::from_min_max(pos2(0.0, 0.0), pos2(200.0, 14.0)),
+            Rect::from_min_max(pos2(180.0, 140.0), pos2(240.0, 156.0)),
+        ];
+        for most in [0, 1, 5, 12, 100] {
+            let placed = place_labels(&anchors, &obstacles, bounds, most);
+            assert!(placed.len() <= most);
+            if most > 0 {
+                assert!(!placed.is_empty(), "room for at least one of {most}");
+            }
+            for (k, &(i, r)) in placed.iter().enumerate() {
+                assert!(bounds.contains_rect(r));
+                assert!(
+                    obstacles.iter().all(|o| !o.intersects(r)),
+                    "label {i} on an obstacle"
+                );
+                assert!(
+                    placed[k + 1..].iter().all(|(_, q)| !q.intersects(r)),
+                    "label {i} overlaps another"
+                );
+                // Beside its own node, not somewhere else.
+                let p = anchors[i].0;
+                assert!(r.expand(7.0).contains(p), "label {i} away from its node");
+            }
+            // Earlier (more important) labels are placed first: the
+            // indices increase.
+            assert!(placed.windows(2).all(|w| w[0].0 < w[1].0));
+        }
+        // The crowded corner cannot hold all 40 there.
+        let placed = place_labels(&anchors[..40], &[], bounds, 100);
+        assert!(
+            placed.len() < 40,
+            "{} labels in a 60×40 corner",
+            placed.len()
+        );
+    }
 
     fn arc(id: u32, points: &[(f32, f32)]) -> (SimplifiedArcId, Vec<Pos2>) {
         (
