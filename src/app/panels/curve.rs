@@ -251,7 +251,14 @@ impl CurvePanel {
             .x_grid_spacer(decade_grid)
             .y_grid_spacer(decade_grid)
             .show(ui, |plot_ui| {
-                plot_ui.line(Line::new("curve", PlotPoints::from(points)).width(1.5));
+                // Not as a band: egui_plot draws a line with several
+                // points per pixel column as a filled min-max band, which
+                // turns a step plot's vertical drops into a wedge.
+                plot_ui.line(
+                    Line::new("curve", PlotPoints::from(points))
+                        .width(1.5)
+                        .allow_band(false),
+                );
                 let x = cur_x;
                 plot_ui.vline(VLine::new("level", x).width(2.0));
                 let y = (level.num_arcs().max(1) as f64).log10();
