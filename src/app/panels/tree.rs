@@ -653,18 +653,9 @@ impl TreePanel {
                 m.colour,
                 Stroke::new(if active { 2.0 } else { 1.0 }, Color32::WHITE),
             );
-            // The contour's name beside its marker.
-            if let Some(c) = sel.get(m.id)
-                && !c.name.is_empty()
-            {
-                painter.text(
-                    m.pos + vec2(10.0, 0.0),
-                    egui::Align2::LEFT_CENTER,
-                    &c.name,
-                    egui::FontId::proportional(MARKER_NAME_SIZE),
-                    m.colour,
-                );
-            }
+        }
+        for (rect, galley, colour) in marker_names(painter, frame, sel) {
+            painter.galley(rect.min, galley, colour);
         }
     }
 
@@ -724,16 +715,9 @@ impl TreePanel {
         obstacles.push(iso_label.expand(2.0));
         for m in &frame.markers {
             obstacles.push(Rect::from_center_size(m.pos, vec2(16.0, 16.0)));
-            if let Some(c) = sel.get(m.id)
-                && !c.name.is_empty()
-            {
-                let g = painter.layout_no_wrap(
-                    c.name.clone(),
-                    egui::FontId::proportional(MARKER_NAME_SIZE),
-                    m.colour,
-                );
-                obstacles.push(marker_name_rect(m.pos, g.size()).expand(2.0));
-            }
+        }
+        for (r, _, _) in marker_names(painter, frame, sel) {
+            obstacles.push(r.expand(2.0));
         }
         // Inside the plot, never in the legend's strip above it.
         let bounds = Rect::from_min_max(
@@ -939,9 +923,84 @@ const VALUE_LABEL_SIZE: f32 = 9.5;
 const MARKER_NAME_SIZE: f32 = 12.0;
 
 /// Where a marker's name is drawn: left-aligned 10 points right of it,
-/// centred on it.
+/// centred on it, unless that covers another marker or a name placed
+/// before it (then left of it, above or below, the first that is clear).
 fn marker_name_rect(marker: Pos2, size: Vec2) -> Rect {
     Rect::from_min_size(marker + vec2(10.0, -0.5 * size.y), size)
+}
+
+/// The names of the named markers, each placed by [`place_labels`] clear
+/// of every marker and of the names before it (markers in selection
+/// order), else right of its marker: (rect, text, colour).
+fn marker_names(
+    painter: &egui::Painter,
+    frame: &Frame,
+    sel: &Selection,
+) -> Vec<(Rect, std::sync::Arc<egui::Galley>, Color32)> {
+    let named: Vec<(&Marker, std::sync::Arc<egui::Galley>)> = frame
+        .markers
+        .iter()
+        .filter_map(|m| {
+            let c = sel.get(m.id)?;
+            (!c.name.is_empty()).then(|| {
+                let g = painter.layout_no_wrap(
+                    c.name.clone(),
+                    egui::FontId::proportional(MARKER_NAME_SIZE),
+                    m.colour,
+                );
+                (m, g)
+            })
+        })
+        .collect();
+    if named.is_empty() {
+        return Vec::new();
+    }
+    let all: Vec<Pos2> = frame.markers.iter().map(|m| m.pos).collect();
+    let names: Vec<(Pos2, Vec2)> = named.iter().map(|(m, g)| (m.pos, g.size())).collect();
+    let rects = place_marker_names(&all, &names, frame.rect);
+    named
+        .into_iter()
+        .zip(rects)
+        .map(|((m, g), rect)| (rect, g, m.colour))
+        .collect()
+}
+
+/// Where each name goes: `names` holds (its marker, its text's size) in
+/// selection order, `markers` every marker. Each name is placed by
+/// [`place_labels`] right of, left of, above or below its marker, clear
+/// of every marker's core (smaller than the labels' gap, so that a name's
+/// own marker never blocks it) and of the names before it, padded by 4
+/// points a side to keep clear of the markers' rims; a name that fits
+/// nowhere goes right of its marker.
+fn place_marker_names(markers: &[Pos2], names: &[(Pos2, Vec2)], bounds: Rect) -> Vec<Rect> {
+    const PAD: f32 = 4.0;
+    let obstacles: Vec<Rect> = markers
+        .iter()
+        .map(|&p| Rect::from_center_size(p, vec2(10.0, 10.0)))
+        .collect();
+    let anchors: Vec<(Pos2, Vec2)> = names
+        .iter()
+        .map(|&(p, size)| (p, size + vec2(2.0 * PAD, 2.0 * PAD)))
+        .collect();
+    let mut at: Vec<Option<Rect>> = vec![None; names.len()];
+    for (i, r) in place_labels(&anchors, &obstacles, bounds, usize::MAX) {
+        at[i] = Some(r);
+    }
+    names
+        .iter()
+        .zip(at)
+        .map(|(&(p, size), r)| match r {
+            // Inside the padded rect, on the side away from the marker.
+            Some(r) if r.center().x > p.x + 1.0 => {
+                Rect::from_min_size(pos2(r.max.x - size.x, r.center().y - 0.5 * size.y), size)
+            }
+            Some(r) if r.center().x < p.x - 1.0 => {
+                Rect::from_min_size(pos2(r.min.x, r.center().y - 0.5 * size.y), size)
+            }
+            Some(r) => Rect::from_center_size(r.center(), size),
+            None => marker_name_rect(p, size),
+        })
+        .collect()
 }
 
 /// The live nodes worth a value label at `level`, most important first
@@ -1035,6 +1094,32 @@ pub fn place_labels(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn marker_names_side_by_side_go_apart_clear_of_every_marker() {
+        let bounds = Rect::from_min_max(pos2(0.0, 0.0), pos2(400.0, 300.0));
+        // Two markers 22 points apart on one row (the eyes of colin27),
+        // a third just above the second, each with a name wider than the
+        // gap between them.
+        let markers = [pos2(80.0, 150.0), pos2(102.0, 150.0), pos2(102.0, 128.0)];
+        let size = vec2(50.0, 12.0);
+        let names: Vec<(Pos2, Vec2)> = markers.iter().map(|&p| (p, size)).collect();
+        let rects = place_marker_names(&markers, &names, bounds);
+        assert_eq!(rects.len(), 3);
+        for (i, r) in rects.iter().enumerate() {
+            assert!(bounds.contains_rect(*r), "{i}: {r:?}");
+            for (j, q) in rects.iter().enumerate().skip(i + 1) {
+                assert!(!r.intersects(*q), "names {i} and {j} overlap: {r:?} {q:?}");
+            }
+            for (k, &m) in markers.iter().enumerate() {
+                let rim = Rect::from_center_size(m, vec2(12.0, 12.0));
+                assert!(!r.intersects(rim), "name {i} covers marker {k}: {r:?}");
+            }
+        }
+        // The first keeps its usual place when nothing is in the way.
+        let alone = place_marker_names(&markers[..1], &names[..1], bounds);
+        assert!(alone[0].min.x > markers[0].x && (alone[0].center().y - 150.0).abs() < 0.5);
+    }
 
     #[test]
     fn value_labels_never_overlap_each_other_or_obstacles_and_are_at_most_n() {
