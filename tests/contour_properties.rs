@@ -3,6 +3,7 @@
 //! marching-tetrahedra pass over the whole volume.
 
 use flexiso::contour::oracle::{all_contours_by_following, marching_tetrahedra};
+use flexiso::contour::topology::triangle_area;
 use flexiso::contour::{
     ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, all_contours,
     contours_through, path_seed, path_seed_in_chain,
@@ -42,7 +43,7 @@ fn check_all(
         assert!(
             c.indices
                 .chunks_exact(3)
-                .all(|tri| twice_area(c, tri) > 0.0),
+                .all(|tri| triangle_area(&c.positions, tri) > 0.0),
             "arc {:?} at {iso:?}: a zero-area triangle",
             c.arc
         );
@@ -133,20 +134,6 @@ fn check_all(
         "one contour per level-set component"
     );
     contours
-}
-
-/// Twice the area of triangle `t` of `c`, in float64.
-fn twice_area(c: &ContourMesh, t: &[u32]) -> f64 {
-    let p = |i: u32| c.positions[i as usize].map(f64::from);
-    let (a, b, d) = (p(t[0]), p(t[1]), p(t[2]));
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let v = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
-    let n = [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ];
-    (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
 }
 
 /// The mesh's triangles as position triples, each rotated to start at its

@@ -219,21 +219,6 @@ mod tests {
         })
     }
 
-    /// Twice the area of triangle `t`, in float64 from the stored float32
-    /// positions.
-    fn area2(m: &ContourMesh, t: &[u32]) -> f64 {
-        let p = |i: u32| m.positions[i as usize].map(f64::from);
-        let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
-        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
-    }
-
     /// How many positions of `meshes` repeat one before them (float32 bit
     /// for bit, as a reader merging vertices sees them).
     fn repeated_positions<'a>(meshes: impl Iterator<Item = &'a ContourMesh>) -> usize {
@@ -266,7 +251,7 @@ mod tests {
             prop_assert_eq!(repeated_positions(all.iter()), 0);
             for m in &mut all {
                 for t in m.indices.chunks_exact(3) {
-                    prop_assert!(area2(m, t) > 0.0, "a zero-area triangle {:?} in {:?}", t, m.arc);
+                    prop_assert!(topology::triangle_area(&m.positions, t) > 0.0, "a zero-area triangle {:?} in {:?}", t, m.arc);
                 }
                 let before = MeshTopology::of(&m.positions, &m.indices);
                 prop_assert_eq!(before.non_manifold_edges, 0);
@@ -299,7 +284,11 @@ mod tests {
         assert_eq!(all.len(), 1);
         let m = &all[0];
         assert!(m.num_triangles() > 0);
-        assert!(m.indices.chunks_exact(3).all(|t| area2(m, t) > 0.0));
+        assert!(
+            m.indices
+                .chunks_exact(3)
+                .all(|t| topology::triangle_area(&m.positions, t) > 0.0)
+        );
         assert_eq!(repeated_positions(std::iter::once(m)), 0);
         // The plane x = 2 (a disk cut by the box), within the margin.
         for p in &m.positions {

@@ -76,14 +76,7 @@ impl MeshTopology {
                 let (mut area, mut volume) = (0f64, 0f64);
                 for tri in chunk.chunks_exact(3) {
                     let p = [0, 1, 2].map(|i| positions[tri[i] as usize].map(|c| c as f64));
-                    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-                    let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-                    let nrm = [
-                        u[1] * v[2] - u[2] * v[1],
-                        u[2] * v[0] - u[0] * v[2],
-                        u[0] * v[1] - u[1] * v[0],
-                    ];
-                    area += 0.5 * (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+                    area += triangle_area(positions, tri);
                     let c = [
                         p[1][1] * p[2][2] - p[1][2] * p[2][1],
                         p[1][2] * p[2][0] - p[1][0] * p[2][2],
@@ -277,6 +270,20 @@ impl UnionFind {
     }
 }
 
+/// The area of triangle `tri` (three indices into `positions`), in
+/// float64 from the stored float32 corners.
+pub fn triangle_area(positions: &[[f32; 3]], tri: &[u32]) -> f64 {
+    let p = [0, 1, 2].map(|i| positions[tri[i] as usize].map(f64::from));
+    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -307,14 +314,7 @@ mod tests {
                 uf.union(a, b);
             }
             let p = [0, 1, 2].map(|i| positions[tri[i] as usize].map(|c| c as f64));
-            let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-            let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            area += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            area += triangle_area(positions, tri);
             let c = [
                 p[1][1] * p[2][2] - p[1][2] * p[2][1],
                 p[1][2] * p[2][0] - p[1][0] * p[2][2],
