@@ -344,10 +344,11 @@ impl TreePanel {
         painter.rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
         self.draw_axis(ui, &painter, &frame);
         let (iso_y, iso_label) = self.draw_iso_line(&painter, &frame, *global_h);
-        self.draw_tree(&painter, &frame, level, sel);
+        let names = marker_names(&painter, &frame, sel);
+        self.draw_tree(&painter, &frame, level, sel, &names);
         let legend = draw_legend(ui, &painter, &frame);
         let value_labels =
-            self.draw_value_labels(ui, &painter, &frame, ds, level, sel, (legend, iso_label));
+            self.draw_value_labels(ui, &painter, &frame, ds, level, &names, (legend, iso_label));
         if let Some(a) = self.hovered
             && self.drag.is_none()
         {
@@ -623,6 +624,7 @@ impl TreePanel {
         frame: &Frame,
         level: &SimplifiedTree,
         sel: &Selection,
+        names: &[MarkerName],
     ) {
         for (&(id, _, _), path) in frame.segs.iter().zip(&frame.paths) {
             let (width, colour) = if let Some(m) = frame.markers.iter().find(|m| m.arc == id) {
@@ -654,8 +656,8 @@ impl TreePanel {
                 Stroke::new(if active { 2.0 } else { 1.0 }, Color32::WHITE),
             );
         }
-        for (rect, galley, colour) in marker_names(painter, frame, sel) {
-            painter.galley(rect.min, galley, colour);
+        for (rect, galley, colour) in names {
+            painter.galley(rect.min, galley.clone(), *colour);
         }
     }
 
@@ -672,7 +674,7 @@ impl TreePanel {
         frame: &Frame,
         ds: &Dataset,
         level: &SimplifiedTree,
-        sel: &Selection,
+        names: &[MarkerName],
         (legend, iso_label): (Rect, Rect),
     ) -> Vec<(SimplifiedNodeId, Rect, String)> {
         let sim = level.simplification();
@@ -716,7 +718,7 @@ impl TreePanel {
         for m in &frame.markers {
             obstacles.push(Rect::from_center_size(m.pos, vec2(16.0, 16.0)));
         }
-        for (r, _, _) in marker_names(painter, frame, sel) {
+        for (r, _, _) in names {
             obstacles.push(r.expand(2.0));
         }
         // Inside the plot, never in the legend's strip above it.
@@ -922,21 +924,20 @@ const VALUE_LABEL_SIZE: f32 = 9.5;
 /// Font size of a marker's name.
 const MARKER_NAME_SIZE: f32 = 12.0;
 
-/// Where a marker's name is drawn: left-aligned 10 points right of it,
-/// centred on it, unless that covers another marker or a name placed
-/// before it (then left of it, above or below, the first that is clear).
+/// A marker's name where it is drawn: its rect, its text, its colour.
+type MarkerName = (Rect, std::sync::Arc<egui::Galley>, Color32);
+
+/// A marker's name left-aligned 10 points right of it, centred on it:
+/// where [`place_marker_names`] puts a name that fits nowhere clear.
 fn marker_name_rect(marker: Pos2, size: Vec2) -> Rect {
     Rect::from_min_size(marker + vec2(10.0, -0.5 * size.y), size)
 }
 
 /// The names of the named markers, each placed by [`place_labels`] clear
 /// of every marker and of the names before it (markers in selection
-/// order), else right of its marker: (rect, text, colour).
-fn marker_names(
-    painter: &egui::Painter,
-    frame: &Frame,
-    sel: &Selection,
-) -> Vec<(Rect, std::sync::Arc<egui::Galley>, Color32)> {
+/// order), else right of its marker. Laid out once a frame, for the
+/// markers and for the value labels that keep clear of them.
+fn marker_names(painter: &egui::Painter, frame: &Frame, sel: &Selection) -> Vec<MarkerName> {
     let named: Vec<(&Marker, std::sync::Arc<egui::Galley>)> = frame
         .markers
         .iter()
