@@ -820,6 +820,146 @@ fn the_first_screen_of_colin27_ch2_shows_at_least_three_contours() {
     check_first_screen(&h, "colin27_ch2");
 }
 
+/// The README's walk-through, as a newcomer does it in the window: on
+/// colin27_ch2's first screen (the brain among its contours), choose the
+/// volume measure in its box, type 46 in the arcs box and press Enter,
+/// then shift-click the two down-going branches at the far left. Both
+/// clicks add (the first-screen contours stay) and the two new contours
+/// are the eyes: two small closed surfaces side by side, mirror images
+/// across the brain's mid-plane.
+#[test]
+fn the_brain_and_both_eyes_of_colin27_in_five_actions() {
+    use common::harness::shift_click;
+    let Some(path) = common::data::dataset("colin27_ch2.nrrd") else {
+        return;
+    };
+    let (mut h, _) = first_screen(load(path.to_str().expect("a UTF-8 path")));
+    let first: Vec<_> = h
+        .state()
+        .selection()
+        .contours
+        .iter()
+        .map(|c| c.id)
+        .collect();
+    assert!(first.len() >= 3, "the first screen shows contours");
+    // The brain: the first-screen contour with the most triangles.
+    let brain_box = {
+        let sel = &h.state().selection().contours;
+        let brain = sel
+            .iter()
+            .filter_map(|c| c.mesh.as_ref())
+            .max_by_key(|m| m.num_triangles())
+            .expect("a mesh");
+        mesh_box(brain)
+    };
+
+    // 1–2: the measure box, then "volume".
+    h.get_by_label("measure").click();
+    h.run_steps(2);
+    h.get_by_label("volume").click();
+    h.run_steps(2);
+    h.state_mut().wait_for_job();
+    h.run_steps(3);
+    assert_eq!(
+        h.state().dataset().expect("dataset").sim.measure(),
+        flexiso::simplify::Measure::Volume
+    );
+    // 3: 46 arcs, Enter.
+    type_arcs(&mut h, 46);
+    h.key_press(egui::Key::Enter);
+    h.run_steps(3);
+    settle(&mut h);
+    assert_eq!(h.state().level().expect("level").num_arcs(), 46);
+
+    // The down-going branches' tips: shown arcs whose lower node is a
+    // leaf (a minimum); the two drawn farthest left.
+    let leftmost: Vec<(SimplifiedArcId, egui::Pos2)> = {
+        let app = h.state();
+        let level = app.level().expect("level");
+        let mut degree = std::collections::HashMap::new();
+        for a in level.arcs() {
+            *degree.entry(a.upper).or_insert(0) += 1;
+            *degree.entry(a.lower).or_insert(0) += 1;
+        }
+        let mut tips: Vec<_> = app
+            .tree_panel()
+            .drawn
+            .arcs
+            .iter()
+            .copied()
+            .filter(|&(a, _)| degree[&level.arc(a).lower] == 1)
+            .collect();
+        tips.sort_by(|x, y| x.1.x.total_cmp(&y.1.x));
+        tips.truncate(2);
+        tips
+    };
+    assert_eq!(leftmost.len(), 2, "two down-going branches");
+    // 4–5: shift-click each.
+    for &(_, p) in &leftmost {
+        shift_click(&mut h, p);
+    }
+    let sel = &h.state().selection().contours;
+    assert_eq!(sel.len(), first.len() + 2, "both shift-clicks added");
+    for id in &first {
+        assert!(sel.iter().any(|c| c.id == *id), "contour #{id} stayed");
+    }
+    let eyes: Vec<_> = sel
+        .iter()
+        .filter(|c| !first.contains(&c.id))
+        .map(|c| c.mesh.as_ref().expect("extracted"))
+        .collect();
+    let (blo, bhi) = brain_box;
+    let mid = 0.5 * (blo[0] + bhi[0]);
+    let (a, b) = (mesh_box(eyes[0]), mesh_box(eyes[1]));
+    let centre = |(lo, hi): ([f32; 3], [f32; 3])| -> [f32; 3] {
+        std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]))
+    };
+    let (ca, cb) = (centre(a), centre(b));
+    eprintln!(
+        "eyes centred at {ca:?} and {cb:?}; brain x {} .. {}",
+        blo[0], bhi[0]
+    );
+    let width = bhi[0] - blo[0];
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let size = a.1[k] - a.0[k];
+        assert!(
+            size > 0.0 && size < 0.25 * width,
+            "an eye is small: {axis} size {size} (brain width {width})"
+        );
+    }
+    assert!(
+        (0.5 * (ca[0] + cb[0]) - mid).abs() < 0.05 * width,
+        "mirror images across the mid-plane: x {} and {}, mid {mid}",
+        ca[0],
+        cb[0]
+    );
+    assert!(
+        (ca[0] - cb[0]).abs() > 0.2 * width,
+        "side by side: x {} and {}",
+        ca[0],
+        cb[0]
+    );
+    for k in 1..3 {
+        assert!(
+            (ca[k] - cb[k]).abs() < 0.05 * width,
+            "at the same height and depth: {ca:?} and {cb:?}"
+        );
+    }
+}
+
+/// The box of a mesh's positions.
+fn mesh_box(m: &flexiso::contour::ContourMesh) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in &m.positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
 #[test]
 fn hovering_an_arc_says_what_it_is_and_previews_its_contour_dimmed() {
     use flexiso::app::jobs::preview::PreviewState;

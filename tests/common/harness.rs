@@ -92,3 +92,23 @@ pub fn synthetic_explorer() -> Harness<'static, FlexisoApp> {
     assert!(h.state().dataset().is_some());
     h
 }
+
+/// A click with shift held (adds to the selection): press and release at
+/// `p`, the shift modifier on both events and held between them.
+pub fn shift_click(h: &mut Harness<'_, FlexisoApp>, p: Pos2) {
+    h.hover_at(p);
+    h.run_steps(1);
+    for pressed in [true, false] {
+        h.event_modifiers(
+            egui::Event::PointerButton {
+                pos: p,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: egui::Modifiers::SHIFT,
+            },
+            egui::Modifiers::SHIFT,
+        );
+        h.run_steps(1);
+    }
+    settle(h);
+}
