@@ -1,8 +1,9 @@
 //! What the tree layout keeps across measures (the module doc of
 //! `flexiso::simplify::layout`, "Across measures"): a branch whose whole
-//! subtree is the same under two measures has its subtree's columns in the
-//! same order under both when it hangs on the same side of its parent,
-//! and in exactly the reverse order when on the other side.
+//! subtree is the same under two measures (the same branches, pruned in
+//! the same relative order) has its subtree's columns in the same order
+//! under both when it hangs on the same side of its parent, and in
+//! exactly the reverse order when on the other side.
 
 use flexiso::field::synthetic::Synthetic;
 use flexiso::progress::Progress;
@@ -14,12 +15,14 @@ use proptest::prelude::*;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-/// A branch's subtree as a measure-free value: per node of the subtree,
-/// the tip of the branch it lies on, and per branch, its tip, saddle and
-/// the tip of its parent inside the subtree.
+/// A branch's subtree as a value to compare across measures: per node,
+/// the tip of the branch it lies on; per branch, its tip, saddle and
+/// the tip of its parent inside the subtree; and the tips in the order
+/// their branches are pruned.
 type Signature = (
     BTreeMap<u32, u32>,
     BTreeMap<u32, (Option<u32>, Option<u32>)>,
+    Vec<u32>,
 );
 
 struct Drawn {
@@ -75,7 +78,12 @@ impl Drawn {
                 .flatten();
             shape.insert(self.tip(d), (br.attachment(d).map(|v| v.0), parent));
         }
-        (on, shape)
+        // The order in which its branches are pruned (tips, first pruned
+        // first): the layout weighs an unavoidable crossing by it.
+        let mut pruned = self.subtree[b.0 as usize].clone();
+        pruned.sort();
+        let order = pruned.into_iter().map(|d| self.tip(d)).collect();
+        (on, shape, order)
     }
 
     /// The tips of `b`'s subtree, left to right.
