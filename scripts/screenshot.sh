@@ -6,7 +6,7 @@
 #                     important branches as contours
 #   02_selected.png   two contours selected (click, shift-click on arcs)
 #   03_dragged.png    the first contour's marker dragged up its arc
-#   04_finer.png      a finer level (a click left on the simplification curve)
+#   04_finer.png      a finer level, at most 200 arcs (clicks left on the curve)
 #   04_simplified.png a coarser level (a click right on the curve)
 #   05_all.png        "all contours at h" switched on
 #
@@ -143,11 +143,21 @@ if [ -n "${mx:-}" ]; then
 fi
 
 # The first screen sits on the curve's widest plateau, so a short drag may
-# not leave it: click well left (smaller features kept: more arcs), then
-# well right (fewer arcs). The first screen's level is the third.
+# not leave it: click left (smaller features kept: more arcs), then well
+# right (fewer arcs). The first screen's level is the third. The finer
+# level is the first, from 15 % of the curve rightwards, that shows more
+# arcs than the first screen but at most 200 (a big volume has tens of
+# thousands at 15 %: a grey mass, not a level anyone reads).
 read -r cx0 cy0 cx1 cy1 <<<"$(rect curve)"
 cy=$(( (cy0 + cy1) / 2 ))
-click $((cx0 + (cx1 - cx0) * 15 / 100)) "$cy" 4
+first_arcs=$(grep -c '^arc ' "$DUMP" || true)
+for pct in $(seq 15 5 80); do
+  click $((cx0 + (cx1 - cx0) * pct / 100)) "$cy" 4
+  arcs=$(grep -c '^arc ' "$DUMP" || true)
+  echo "curve at $pct %: $arcs arcs (first screen $first_arcs)"
+  [ "$arcs" -le 200 ] && [ "$arcs" -gt "$first_arcs" ] && break
+  [ "$arcs" -le "$first_arcs" ] && break
+done
 shot 04_finer.png
 click $((cx0 + (cx1 - cx0) * 85 / 100)) "$cy" 4
 shot 04_simplified.png
