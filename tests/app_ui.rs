@@ -1136,6 +1136,55 @@ fn fitting_frames_the_whole_box_in_a_narrow_view() {
     }
 }
 
+/// Double-click in the 3D view fits the contours as they are now: after a
+/// marker drag moved a contour, the camera centres on the contour's new
+/// box, not on the one it had when it was first extracted.
+#[test]
+fn double_click_fits_the_contours_current_geometry_after_a_drag() {
+    let (mut h, gpu) = explorer();
+    if !gpu {
+        return;
+    }
+    let (_, p) = tallest_arc(&h);
+    click(&mut h, p);
+    let centre = |h: &Harness<'_, FlexisoApp>| {
+        let c = &h.state().selection().contours[0];
+        let (lo, hi) = mesh_box(c.mesh.as_ref().expect("extracted"));
+        glam::Vec3::from(lo).lerp(glam::Vec3::from(hi), 0.5)
+    };
+    let before = centre(&h);
+    let marker = h.state().tree_panel().drawn.markers[0].1;
+    drag(&mut h, marker, marker - egui::vec2(0.0, 150.0));
+    let after = centre(&h);
+    assert!(
+        after.distance(before) > 2.0,
+        "the drag moved the contour: {before} -> {after}"
+    );
+    // Near a corner of the 3D view, off the contour.
+    let view = h.state().view3d().rect.expect("the view was drawn");
+    let q = view.right_top() + egui::vec2(-60.0, 120.0);
+    h.hover_at(q);
+    h.run_steps(1);
+    // Two clicks in one frame: a double-click (the harness's frames are
+    // a quarter second apart, queued events one frame each).
+    for pressed in [true, false, true, false] {
+        h.input_mut().events.push(egui::Event::PointerButton {
+            pos: q,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        });
+    }
+    h.step();
+    h.run_steps(2);
+    settle(&mut h);
+    let t = h.state().view3d().camera.target;
+    assert!(
+        t.distance(after) < 0.5 && t.distance(before) > 0.5,
+        "the camera looks at {t}: the contour's box is centred at {after} now, {before} before the drag"
+    );
+}
+
 #[test]
 fn the_tree_panel_labels_important_values_clear_of_each_other_and_the_markers() {
     let (mut h, _) = explorer();
