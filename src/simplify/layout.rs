@@ -79,8 +79,9 @@
 //! **Coarse levels first.** When connectors of the other side do meet
 //! `f`'s drawing, moving trades crossings: it removes the crossing of
 //! `f`'s connector with the column of a nearer subtree reaching past
-//! `f`'s saddle (shown while `f` and that column both are, so at every
-//! level down to the coarser of the two), and adds crossings with the
+//! `f`'s saddle (or its touch, where that subtree's nodes reach exactly
+//! `f`'s saddle value; shown at every level that shows both `f` and
+//! that column), and adds crossings with the
 //! connectors of the other side's children `d` whose saddles lie in
 //! `f`'s drawing (shown only while `f` and `d` both are). A person reads
 //! the coarse levels (the first screen has 8 to 60 arcs; a few hundred
