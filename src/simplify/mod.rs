@@ -456,7 +456,12 @@ impl Pruning {
             })
             .unzip_into_vecs(&mut ends, &mut costs);
         let mut nodes = vec![NodeLinks::default(); n];
+        // The arcs come sorted by lower node: the lower ends stream, the
+        // upper ones are scattered, so they are prefetched ahead.
         for (a, r) in ends.iter().enumerate() {
+            if let Some(f) = ends.get(a + PREFETCH_FAR) {
+                crate::tree::sweep::prefetch(&nodes, f.upper as usize);
+            }
             let lo = &mut nodes[r.lower as usize];
             lo.n_up += 1;
             lo.x_up ^= a as u32;
