@@ -41,7 +41,11 @@
 //! breadth-first order and one pass over it. On millions of superarcs the
 //! constant is cache misses, so nodes are combined by breadth-first
 //! *position* (children of a node are consecutive, so parents are met in
-//! nearly descending order) and the pass prefetches its arcs' records.
+//! nearly descending order), the pass prefetches its arcs' records, and
+//! the breadth-first search prefetches, in stages, the chain of reads that
+//! leads from a queued node to its neighbours (`Rooted::prefetch`). The
+//! nodes' values are read once, in parallel, and shared with the collapse
+//! ([`node_values`]).
 //!
 //! A new measure (surface area, say) adds a field to [`RegionSummary`], its
 //! Update for the regular vertices of an arc, and one match arm per cost.
@@ -148,6 +152,15 @@ pub struct RegionSummary {
     pub extreme: f64,
 }
 
+/// The value of every node of `tree`, by node id, read in parallel (the
+/// nodes' vertices lie all over the field: one cache miss each).
+pub fn node_values(tree: &ContourTree, field: &ScalarField) -> Vec<f64> {
+    tree.nodes()
+        .par_iter()
+        .map(|n| field.value(n.vertex))
+        .collect()
+}
+
 /// Both sides of every superarc of a tree, indexed by [`ArcId`].
 #[derive(Clone, Debug, Default)]
 pub struct ArcRegions {
@@ -159,6 +172,12 @@ impl ArcRegions {
     /// Algorithm 1: summaries of both sides of every superarc (see the
     /// module documentation). Reads each value of the field once.
     pub fn new(tree: &ContourTree, field: &ScalarField) -> Self {
+        Self::with_node_values(tree, field, &node_values(tree, field))
+    }
+
+    /// As [`ArcRegions::new`], with the value of every node of `tree`
+    /// already read ([`node_values`]; the collapse needs them too).
+    pub fn with_node_values(tree: &ContourTree, field: &ScalarField, node_value: &[f64]) -> Self {
         let arcs = tree.arcs();
         let nodes = tree.nodes();
         let m = arcs.len();
@@ -192,7 +211,6 @@ impl ArcRegions {
                 })
                 .collect()
         });
-        let node_value: Vec<f64> = nodes.par_iter().map(|n| field.value(n.vertex)).collect();
         let (total_count, total_sum) = {
             let s: f64 =
                 regular.iter().map(|r| r.sum).sum::<f64>() + node_value.iter().sum::<f64>();
@@ -400,8 +418,9 @@ impl Rooted {
         r.pos[root.0 as usize] = 0;
         let mut head = 0;
         while head < r.order.len() {
+            r.prefetch(tree, head);
             let v = NodeId(r.order[head]);
-            for &a in tree.up_arcs(v).iter().chain(tree.down_arcs(v)) {
+            for &a in tree.node_arcs(v) {
                 let arc = tree.arc(a);
                 let u = if arc.lower == v { arc.upper } else { arc.lower };
                 if r.pos[u.0 as usize] == NO_ARC {
@@ -416,7 +435,41 @@ impl Rooted {
         }
         r
     }
+
+    /// Hints the cache about what the breadth-first search reads for the
+    /// nodes queued after `head`: a node's arcs are found through three
+    /// dependent reads (offsets, list, arc records) and lead to a fourth
+    /// (the far end's position), all scattered, so each is prefetched one
+    /// stage ahead of the next, `BFS_AHEAD` nodes apart; by the time the
+    /// search reaches a node, its reads are in cache. (The queue is ahead
+    /// of `head` except near the start and the end, where this does
+    /// nothing.)
+    fn prefetch(&self, tree: &ContourTree, head: usize) {
+        let at = |k: usize| self.order.get(head + k * BFS_AHEAD).map(|&v| NodeId(v));
+        if let Some(v) = at(4) {
+            tree.prefetch_node_arcs(v);
+        }
+        if let Some(v) = at(3) {
+            prefetch(tree.node_arcs(v), 0);
+        }
+        if let Some(v) = at(2) {
+            for &a in tree.node_arcs(v) {
+                prefetch(tree.arcs(), a.0 as usize);
+            }
+        }
+        if let Some(v) = at(1) {
+            for &a in tree.node_arcs(v) {
+                let arc = tree.arc(a);
+                let u = if arc.lower == v { arc.upper } else { arc.lower };
+                prefetch(&self.pos, u.0 as usize);
+            }
+        }
+    }
 }
+
+/// The distance, in queued nodes, between the stages of
+/// [`Rooted::prefetch`].
+const BFS_AHEAD: usize = 8;
 
 #[cfg(test)]
 mod tests {

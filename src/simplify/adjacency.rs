@@ -88,14 +88,14 @@ impl LiveAdjacency {
 
     /// Arc `a` becomes live: it joins the lists of both its ends.
     pub(super) fn link(&mut self, sim: &Simplification, a: u32) {
-        self.push(Side::Up, sim.arcs[a as usize].lower, a);
-        self.push(Side::Down, sim.arcs[a as usize].upper, a);
+        self.push(Side::Up, sim.ends[a as usize].lower, a);
+        self.push(Side::Down, sim.ends[a as usize].upper, a);
     }
 
     /// Arc `a` is no longer live: it leaves both lists.
     pub(super) fn unlink(&mut self, sim: &Simplification, a: u32) {
-        self.take(Side::Up, sim.arcs[a as usize].lower, a);
-        self.take(Side::Down, sim.arcs[a as usize].upper, a);
+        self.take(Side::Up, sim.ends[a as usize].lower, a);
+        self.take(Side::Down, sim.ends[a as usize].upper, a);
     }
 
     fn iter(

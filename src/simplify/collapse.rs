@@ -29,7 +29,7 @@
 //! bytes (the chains).
 
 use crate::field::ScalarField;
-use crate::measure::geometric::{ArcRegions, RegionSummary};
+use crate::measure::geometric::{ArcRegions, RegionSummary, node_values};
 use crate::tree::{ArcId, ContourTree, NodeId};
 
 /// The contour tree with every zero-height superarc contracted and the
@@ -71,9 +71,11 @@ impl CollapsedTree {
     /// The regions and the collapse do not depend on each other: they run
     /// side by side (rayon), and the summaries are attached at the end.
     pub fn new(tree: &ContourTree, field: &ScalarField) -> Self {
+        // Both read the nodes' values, scattered over the field: once.
+        let node_values = node_values(tree, field);
         let (regions, mut collapsed) = rayon::join(
-            || ArcRegions::new(tree, field),
-            || Self::without_regions(tree, field),
+            || ArcRegions::with_node_values(tree, field, &node_values),
+            || Self::without_regions(tree, &node_values),
         );
         collapsed.attach(&regions);
         collapsed
@@ -81,7 +83,7 @@ impl CollapsedTree {
 
     /// As [`CollapsedTree::new`], with the regions already computed.
     pub fn with_regions(tree: &ContourTree, field: &ScalarField, regions: &ArcRegions) -> Self {
-        let mut collapsed = Self::without_regions(tree, field);
+        let mut collapsed = Self::without_regions(tree, &node_values(tree, field));
         collapsed.attach(regions);
         collapsed
     }
@@ -101,11 +103,11 @@ impl CollapsedTree {
     }
 
     /// The collapsed tree with no region summaries yet.
-    fn without_regions(tree: &ContourTree, field: &ScalarField) -> Self {
+    fn without_regions(tree: &ContourTree, node_values: &[f64]) -> Self {
         let nodes = tree.nodes();
-        // Each node's value read once: the arcs below visit nodes in no
-        // order, and the values array is far larger than the cache.
-        let node_values: Vec<f64> = nodes.iter().map(|n| field.value(n.vertex)).collect();
+        // Each node's value read once, beforehand: the arcs below visit
+        // nodes in no order, and the values array is far larger than the
+        // cache.
         let value = |n: NodeId| node_values[n.0 as usize];
         // Union-find on supernodes; the root of a class is its smallest
         // node, i.e. its lowest in the vertex order.

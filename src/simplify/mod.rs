@@ -33,10 +33,12 @@
 //! starting leaves, then O(1) per pop and step plus O(log) per leaf made.
 //! On millions of arcs the constant is cache misses, since pops come in
 //! cost order, i.e. at arcs and nodes all over memory. So an arc's ends
-//! and costs are one record, a node's live adjacency one aligned 16-byte
-//! record (`NodeLinks`), liveness a bitset that stays in cache, and the
-//! loop prefetches the records of the starting leaves it will pop next:
-//! a step costs about three misses, overlapped, instead of nine in a row.
+//! are one 8-byte record (its costs lie apart: only a reduction reads
+//! them, and the level view streams the ends alone), a node's live
+//! adjacency one aligned 16-byte record (`NodeLinks`), liveness a bitset
+//! that stays in cache, and the loop prefetches the records of the
+//! starting leaves it will pop next: a step costs about three misses,
+//! overlapped, instead of nine in a row.
 //! The arrays derived from the sequence afterwards (curve, diffs, chains,
 //! ends) are built side by side with rayon. On synthetic-noisy-256 (3.9 M
 //! arcs, 2 M steps) this is about a second on the 2-core reference box.
@@ -157,8 +159,12 @@ pub struct Simplification {
     /// Per node: representative vertex and value.
     node_vertex: Vec<u32>,
     node_value: Vec<f64>,
-    /// Per arc id: ends, costs.
-    arcs: Vec<ArcRecord>,
+    /// Per arc id: its ends, apart from its costs: the pruning loop reads
+    /// mostly ends, the level view only ends, so more of them share a
+    /// cache line.
+    ends: Vec<ArcEnds>,
+    /// Per arc id: (up, down) costs.
+    costs: Vec<(f64, f64)>,
     /// Per arc id made by reduction (index `id - base_arcs`): (e1, e2), the
     /// arcs above and below the reduced node.
     parts: Vec<(u32, u32)>,
@@ -239,18 +245,20 @@ impl Simplification {
                 reduced,
             });
         }
-        let Pruning { arcs, parts, .. } = tree;
+        let Pruning {
+            ends, costs, parts, ..
+        } = tree;
         // What the level view and the queries read, in three independent
         // groups, side by side.
         let (
             (curve, diffs),
             ((chain_start, chain_len, chain, superarc_base), (merged_into, ends_at, made_at)),
         ) = rayon::join(
-            || (curve_of(m, &steps), diffs_of(m, &steps, &arcs, &parts)),
+            || (curve_of(m, &steps), diffs_of(m, &steps, &ends, &parts)),
             || {
                 rayon::join(
                     || {
-                        let (start, len, chain) = layout_chains(base, arcs.len(), &parts);
+                        let (start, len, chain) = layout_chains(base, ends.len(), &parts);
                         let mut superarc_base = vec![NONE; base.perturbed_arcs()];
                         for a in 0..m {
                             let s = start[a] as usize;
@@ -260,7 +268,7 @@ impl Simplification {
                         }
                         (start, len, chain, superarc_base)
                     },
-                    || ends_of(m, arcs.len(), &steps, &parts),
+                    || ends_of(m, ends.len(), &steps, &parts),
                 )
             },
         );
@@ -268,7 +276,8 @@ impl Simplification {
             measure,
             node_vertex,
             node_value,
-            arcs,
+            ends,
+            costs,
             parts,
             chain_start,
             chain_len,
@@ -302,7 +311,7 @@ impl Simplification {
 
     /// Number of arc ids (collapsed arcs and arcs made by reduction).
     pub fn num_arc_ids(&self) -> usize {
-        self.arcs.len()
+        self.ends.len()
     }
 
     /// Number of nodes (of the collapsed tree).
@@ -322,22 +331,22 @@ impl Simplification {
 
     /// Upper node of an arc.
     pub fn upper(&self, a: SimplifiedArcId) -> SimplifiedNodeId {
-        SimplifiedNodeId(self.arcs[a.0 as usize].upper)
+        SimplifiedNodeId(self.ends[a.0 as usize].upper)
     }
 
     /// Lower node of an arc.
     pub fn lower(&self, a: SimplifiedArcId) -> SimplifiedNodeId {
-        SimplifiedNodeId(self.arcs[a.0 as usize].lower)
+        SimplifiedNodeId(self.ends[a.0 as usize].lower)
     }
 
     /// up(e): the cost of pruning the arc as a lower leaf.
     pub fn up_cost(&self, a: SimplifiedArcId) -> f64 {
-        self.arcs[a.0 as usize].up_cost
+        self.costs[a.0 as usize].0
     }
 
     /// down(e): the cost of pruning the arc as an upper leaf.
     pub fn down_cost(&self, a: SimplifiedArcId) -> f64 {
-        self.arcs[a.0 as usize].down_cost
+        self.costs[a.0 as usize].1
     }
 
     /// The two arcs (above, below) a reduced arc was made from, or `None`
@@ -383,14 +392,13 @@ impl Simplification {
     }
 }
 
-/// An arc id's ends and costs in one record: the pruning loop meets arcs
-/// in cost order, i.e. all over memory, and reads these together.
+/// An arc id's ends: 8 bytes, so that the pruning loop, which meets arcs
+/// in cost order (all over memory), and the level view, which streams the
+/// live ones, read no costs with them.
 #[derive(Clone, Copy, Debug)]
-struct ArcRecord {
+struct ArcEnds {
     upper: u32,
     lower: u32,
-    up_cost: f64,
-    down_cost: f64,
 }
 
 /// A node's live adjacency: its number of live arcs up and down and the
@@ -415,7 +423,10 @@ impl NodeLinks {
 /// The tree as the pruning sequence changes it (paper §3.3): arcs are only
 /// created, never changed, and die when pruned or reduced.
 struct Pruning {
-    arcs: Vec<ArcRecord>,
+    ends: Vec<ArcEnds>,
+    /// Per arc id: (up, down) costs, read only when a reduction makes an
+    /// arc.
+    costs: Vec<(f64, f64)>,
     nodes: Vec<NodeLinks>,
     /// One bit per arc id, set while the arc is live (under a megabyte for
     /// millions of arcs: it stays in cache, unlike the records).
@@ -430,18 +441,27 @@ impl Pruning {
         let m = base.num_arcs();
         let n = base.num_nodes();
         // At most one arc is made per arc pruned.
-        let mut arcs = Vec::with_capacity(2 * m);
-        arcs.par_extend((0..m as u32).into_par_iter().map(|a| {
-            let (u, l) = base.arc(a);
-            ArcRecord {
-                upper: u,
-                lower: l,
-                up_cost: measure.up_cost(base.below(a), node_value[u as usize]),
-                down_cost: measure.down_cost(base.above(a), node_value[l as usize]),
-            }
-        }));
+        let (mut ends, mut costs) = (Vec::with_capacity(2 * m), Vec::with_capacity(2 * m));
+        (0..m as u32)
+            .into_par_iter()
+            .map(|a| {
+                let (u, l) = base.arc(a);
+                (
+                    ArcEnds { upper: u, lower: l },
+                    (
+                        measure.up_cost(base.below(a), node_value[u as usize]),
+                        measure.down_cost(base.above(a), node_value[l as usize]),
+                    ),
+                )
+            })
+            .unzip_into_vecs(&mut ends, &mut costs);
         let mut nodes = vec![NodeLinks::default(); n];
-        for (a, r) in arcs.iter().enumerate() {
+        // The arcs come sorted by lower node: the lower ends stream, the
+        // upper ones are scattered, so they are prefetched ahead.
+        for (a, r) in ends.iter().enumerate() {
+            if let Some(f) = ends.get(a + PREFETCH_FAR) {
+                crate::tree::sweep::prefetch(&nodes, f.upper as usize);
+            }
             let lo = &mut nodes[r.lower as usize];
             lo.n_up += 1;
             lo.x_up ^= a as u32;
@@ -455,7 +475,8 @@ impl Pruning {
             alive[m / 64] = (1u64 << (m % 64)) - 1;
         }
         Self {
-            arcs,
+            ends,
+            costs,
             nodes,
             alive,
             parts: Vec::new(),
@@ -486,14 +507,14 @@ impl Pruning {
     /// The queue entry of arc `a` if it is a leaf: a lower leaf costs
     /// up(a), an upper leaf down(a) (rule 2).
     fn leaf_entry(&self, a: u32) -> Option<Entry> {
-        let r = &self.arcs[a as usize];
+        let r = &self.ends[a as usize];
         match (self.degree(r.lower) == 1, self.degree(r.upper) == 1) {
             (true, false) => Some(Entry {
-                cost: r.up_cost,
+                cost: self.costs[a as usize].0,
                 arc: a,
             }),
             (false, true) => Some(Entry {
-                cost: r.down_cost,
+                cost: self.costs[a as usize].1,
                 arc: a,
             }),
             _ => None,
@@ -508,7 +529,7 @@ impl Pruning {
         if !self.is_alive(a) {
             return None;
         }
-        let r = &self.arcs[a as usize];
+        let r = &self.ends[a as usize];
         let (hi, lo) = (&self.nodes[r.upper as usize], &self.nodes[r.lower as usize]);
         let lower_leaf = lo.degree() == 1;
         let upper_leaf = hi.degree() == 1;
@@ -523,7 +544,7 @@ impl Pruning {
 
     /// Leaf pruning: arc `a` leaves the tree with its leaf node.
     fn leaf_prune(&mut self, a: u32) {
-        let r = self.arcs[a as usize];
+        let r = self.ends[a as usize];
         self.set_alive(a, false);
         let lo = &mut self.nodes[r.lower as usize];
         lo.n_up -= 1;
@@ -542,14 +563,14 @@ impl Pruning {
             x_down: e2,
             ..
         } = self.nodes[s as usize];
-        let (r1, r2) = (self.arcs[e1 as usize], self.arcs[e2 as usize]);
-        let d = self.arcs.len() as u32;
-        self.arcs.push(ArcRecord {
+        let (r1, r2) = (self.ends[e1 as usize], self.ends[e2 as usize]);
+        let d = self.ends.len() as u32;
+        self.ends.push(ArcEnds {
             upper: r1.upper,
             lower: r2.lower,
-            up_cost: r1.up_cost,
-            down_cost: r2.down_cost,
         });
+        self.costs
+            .push((self.costs[e1 as usize].0, self.costs[e2 as usize].1));
         self.parts.push((e1, e2));
         self.set_alive(e1, false);
         self.set_alive(e2, false);
@@ -567,9 +588,9 @@ impl Pruning {
     fn prefetch(&self, far: Option<u32>, near: Option<u32>) {
         use crate::tree::sweep::prefetch;
         if let Some(a) = far {
-            prefetch(&self.arcs, a as usize);
+            prefetch(&self.ends, a as usize);
         }
-        if let Some(r) = near.and_then(|a| self.arcs.get(a as usize)) {
+        if let Some(r) = near.and_then(|a| self.ends.get(a as usize)) {
             prefetch(&self.nodes, r.upper as usize);
             prefetch(&self.nodes, r.lower as usize);
         }
@@ -713,7 +734,7 @@ fn curve_of(m: usize, steps: &[Step]) -> Vec<CurvePoint> {
 }
 
 /// Every step as the level view replays it.
-fn diffs_of(m: usize, steps: &[Step], arcs: &[ArcRecord], parts: &[(u32, u32)]) -> Vec<StepDiff> {
+fn diffs_of(m: usize, steps: &[Step], arcs: &[ArcEnds], parts: &[(u32, u32)]) -> Vec<StepDiff> {
     use rayon::prelude::*;
     steps
         .par_iter()
@@ -858,8 +879,8 @@ impl SimplifiedTree {
         let m = sim.base_arcs;
         let mut degree = vec![(0, 0); n];
         for a in 0..m {
-            degree[sim.arcs[a].upper as usize].1 += 1;
-            degree[sim.arcs[a].lower as usize].0 += 1;
+            degree[sim.ends[a].upper as usize].1 += 1;
+            degree[sim.ends[a].lower as usize].0 += 1;
         }
         let mut arc_pos = vec![NONE; ids];
         for (a, p) in arc_pos.iter_mut().enumerate().take(m) {
@@ -920,21 +941,49 @@ impl SimplifiedTree {
     /// `s` steps when the step that made it (none for the collapsed tree's
     /// arcs) is before `s` and the one that ends it is not.
     fn rebuild(&mut self, step: usize) {
+        use crate::tree::sweep::prefetch;
         let sim = Arc::clone(&self.sim);
         let (m, s) = (sim.base_arcs, step as u32);
-        self.live_arcs.clear();
-        self.arc_pos.fill(NONE);
-        self.degree.fill((0, 0));
         self.adjacency = OnceLock::new();
-        for a in 0..sim.num_arc_ids() {
-            let made = a < m || sim.made_at[a - m] < s;
-            if made && s <= sim.ends_at[a] {
-                let a = a as u32;
-                self.arc_pos[a as usize] = self.live_arcs.len() as u32;
-                self.live_arcs.push(a);
-                self.degree[sim.arcs[a as usize].upper as usize].1 += 1;
-                self.degree[sim.arcs[a as usize].lower as usize].0 += 1;
+        // First which arcs are live, without a branch per arc (at a middle
+        // level liveness looks random, and a mispredicted branch per arc id
+        // cost more than the rest of the scan): every id is written at the
+        // end of the list, which grows only when the arc is live. No level
+        // has more than the collapsed tree's m arcs, so m + 1 slots do.
+        self.live_arcs.clear();
+        self.live_arcs.resize(m + 1, 0);
+        let mut len = 0;
+        let (base_pos, made_pos) = self.arc_pos.split_at_mut(m);
+        let (base_ends, made_ends) = sim.ends_at.split_at(m);
+        for (a, (pos, &end)) in base_pos.iter_mut().zip(base_ends).enumerate() {
+            let live = s <= end;
+            self.live_arcs[len] = a as u32;
+            *pos = if live { len as u32 } else { NONE };
+            len += live as usize;
+        }
+        let made = made_pos.iter_mut().zip(made_ends).zip(&sim.made_at);
+        for (i, ((pos, &end), &start)) in made.enumerate() {
+            let live = (start < s) & (s <= end);
+            self.live_arcs[len] = (m + i) as u32;
+            *pos = if live { len as u32 } else { NONE };
+            len += live as usize;
+        }
+        self.live_arcs.truncate(len);
+        // Then the degrees: one scattered increment per end (the collapsed
+        // tree's arcs come sorted by lower node, the rest in no order), so
+        // both ends are prefetched this many live arcs ahead.
+        const AHEAD: usize = 16;
+        self.degree.fill((0, 0));
+        let ends = &sim.ends;
+        for (i, &a) in self.live_arcs.iter().enumerate() {
+            if let Some(&b) = self.live_arcs.get(i + AHEAD) {
+                let e = ends[b as usize];
+                prefetch(&self.degree, e.upper as usize);
+                prefetch(&self.degree, e.lower as usize);
             }
+            let e = ends[a as usize];
+            self.degree[e.upper as usize].1 += 1;
+            self.degree[e.lower as usize].0 += 1;
         }
         self.step = step;
     }
@@ -1003,7 +1052,7 @@ impl SimplifiedTree {
             .live_arcs
             .iter()
             .flat_map(|&a| {
-                let r = &self.sim.arcs[a as usize];
+                let r = &self.sim.ends[a as usize];
                 [r.upper, r.lower]
             })
             .collect();
@@ -1074,9 +1123,9 @@ impl SimplifiedTree {
                     .filter(|&e| {
                         let e = e as usize;
                         if want_down {
-                            sim.arcs[e].upper == node
+                            sim.ends[e].upper == node
                         } else {
-                            sim.arcs[e].lower == node
+                            sim.ends[e].lower == node
                         }
                     })
                     .min()

@@ -347,6 +347,19 @@ impl ContourTree {
         &self.node_arcs[s..self.node_offsets[i + 1] as usize]
     }
 
+    /// All superarcs at a node, the up arcs first: [`Self::up_arcs`]
+    /// then [`Self::down_arcs`].
+    pub fn node_arcs(&self, id: NodeId) -> &[ArcId] {
+        let i = id.0 as usize;
+        &self.node_arcs[self.node_offsets[i] as usize..self.node_offsets[i + 1] as usize]
+    }
+
+    /// Hints the cache that [`Self::node_arcs`] of this node will be read
+    /// soon (its offsets; the list itself is a second, dependent read).
+    pub(crate) fn prefetch_node_arcs(&self, id: NodeId) {
+        sweep::prefetch(&self.node_offsets, id.0 as usize);
+    }
+
     /// Count of nodes of each kind: (maxima, minima, join saddles, split
     /// saddles). A node that is both a join and a split counts as both.
     pub fn kind_counts(&self) -> (usize, usize, usize, usize) {
