@@ -1,5 +1,6 @@
-//! `flexiso bench [DIR]`: the engine on every volume of a folder and on a
-//! synthetic noisy 256^3 float field, one table row each: stage times, peak
+//! `flexiso bench [DIR]`: the engine on every volume of a folder, on the
+//! smooth built-in field (`--smooth N`) and on a synthetic noisy 256^3
+//! float field, one table row each: stage times, peak
 //! memory and bytes per vertex. The join and split sweeps run in parallel,
 //! so their columns overlap in the total.
 //!
@@ -36,6 +37,10 @@ pub struct Args {
     /// Size of the synthetic noisy float field (0 to skip it).
     #[arg(long, default_value_t = 256)]
     pub synthetic: usize,
+    /// Size of the smooth built-in field (`synthetic:N`, Gaussian blobs:
+    /// long superarcs) to bench too (0 to skip it).
+    #[arg(long, default_value_t = 0)]
+    pub smooth: usize,
     /// Repetitions per dataset; the fastest is reported.
     #[arg(long, default_value_t = 1)]
     pub repeat: usize,
@@ -111,12 +116,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let row = bench_field(&name, &volume.field, load, args.repeat.max(1));
         println!("{}", format_row(&row));
     }
-    if args.synthetic > 0 && args.only.is_none() {
-        let n = args.synthetic;
+    let synthetic = [
+        (args.smooth, "synthetic", None),
+        (args.synthetic, "synthetic-noisy", Some((0.05, 7))),
+    ];
+    for (n, name, noise) in synthetic {
+        if n == 0 || args.only.is_some() {
+            continue;
+        }
         let t = Instant::now();
-        let field = Synthetic::cube(n).with_noise(0.05, 7).generate();
+        let field = match noise {
+            Some((amount, seed)) => Synthetic::cube(n).with_noise(amount, seed),
+            None => Synthetic::cube(n),
+        }
+        .generate();
         let row = bench_field(
-            &format!("synthetic-noisy-{n}"),
+            &format!("{name}-{n}"),
             &field,
             t.elapsed(),
             args.repeat.max(1),
