@@ -200,6 +200,9 @@ impl ArcRegions {
         let regular: Vec<Regular> = crate::with_values!(field.values(), values => {
             (0..m)
                 .into_par_iter()
+                // One arc a task: on smooth fields a few arcs hold most
+                // vertices, and ranges of arcs would leave a core idle.
+                .with_max_len(1)
                 .map(|a| {
                     let vs = tree.arc_vertices(ArcId(a as u32));
                     let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
