@@ -91,28 +91,7 @@ fn shift_click_adds_a_second_contour_and_delete_removes_one() {
         .filter(|(_, q)| q.distance(p) > 40.0)
         .max_by(|a, b| a.1.y.total_cmp(&b.1.y))
         .expect("another arc");
-    h.hover_at(other.1);
-    h.run_steps(1);
-    h.event_modifiers(
-        egui::Event::PointerButton {
-            pos: other.1,
-            button: egui::PointerButton::Primary,
-            pressed: true,
-            modifiers: egui::Modifiers::SHIFT,
-        },
-        egui::Modifiers::SHIFT,
-    );
-    h.run_steps(1);
-    h.event_modifiers(
-        egui::Event::PointerButton {
-            pos: other.1,
-            button: egui::PointerButton::Primary,
-            pressed: false,
-            modifiers: egui::Modifiers::SHIFT,
-        },
-        egui::Modifiers::SHIFT,
-    );
-    settle(&mut h);
+    common::harness::shift_click(&mut h, other.1);
     assert_eq!(h.state().selection().contours.len(), 2, "shift-click adds");
     h.key_press(egui::Key::Delete);
     h.run_steps(2);
@@ -829,7 +808,6 @@ fn the_first_screen_of_colin27_ch2_shows_at_least_three_contours() {
 /// across the brain's mid-plane.
 #[test]
 fn the_brain_and_both_eyes_of_colin27_in_five_actions() {
-    use common::harness::shift_click;
     let Some(path) = common::data::dataset("colin27_ch2.nrrd") else {
         return;
     };
@@ -896,7 +874,7 @@ fn the_brain_and_both_eyes_of_colin27_in_five_actions() {
     assert_eq!(leftmost.len(), 2, "two down-going branches");
     // 4–5: shift-click each.
     for &(_, p) in &leftmost {
-        shift_click(&mut h, p);
+        common::harness::shift_click(&mut h, p);
     }
     let sel = &h.state().selection().contours;
     assert_eq!(sel.len(), first.len() + 2, "both shift-clicks added");
