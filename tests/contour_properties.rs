@@ -582,3 +582,167 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
         }
     }
 }
+
+/// Drags one contour through `cuts` from `arc` at `from`: at each cut the
+/// step to every spanning arc reached through the slab gives what the
+/// follower gives for that arc there; arcs not reached are refused and
+/// leave the dragged contour as it was. Returns how many steps were taken.
+fn drag_matches_the_follower(
+    field: &ScalarField,
+    tree: &ContourTree,
+    arc: ArcId,
+    from: Isovalue,
+    cuts: &[Isovalue],
+) -> usize {
+    use flexiso::contour::DraggedContour;
+    use flexiso::contour::drag::Refused;
+    let Some(seed) = path_seed(tree, field, arc, from) else {
+        return 0;
+    };
+    let mut oracle = ContourFollower::new(field);
+    let Some((mut dragged, first)) =
+        DraggedContour::start(field, &seed, from, &|| false).expect("not cancelled")
+    else {
+        return 0;
+    };
+    assert_same_contour(&first, &oracle.follow(&seed, from), "start");
+    let mut steps = 0;
+    for &to in cuts {
+        let mut moved = false;
+        for c in 0..tree.arcs().len() as u32 {
+            let Some(seed) = path_seed(tree, field, ArcId(c), to) else {
+                continue;
+            };
+            let before = (dragged.arc(), dragged.isovalue(), dragged.num_triangles());
+            match dragged
+                .step(tree, ArcId(c), to, usize::MAX, &|| false)
+                .expect("not cancelled")
+            {
+                Ok(mesh) => {
+                    let at = format!("{before:?} -> arc {c} at {to:?}");
+                    assert_same_contour(&mesh, &oracle.follow(&seed, to), &at);
+                    moved = true;
+                    steps += 1;
+                    break;
+                }
+                Err(Refused::NotConnected) => {
+                    assert_eq!(
+                        (dragged.arc(), dragged.isovalue(), dragged.num_triangles()),
+                        before,
+                        "a refused step changes nothing"
+                    );
+                }
+                Err(Refused::TooLarge) => panic!("no budget was set"),
+            }
+        }
+        if !moved {
+            // Nothing at `to` is reached from here (the contour would
+            // vanish): the dragged contour stays where it is.
+            continue;
+        }
+    }
+    steps
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Dragging a contour step by step (up, down, across nodes, joining
+    /// and leaving pieces) gives at every cut the contour the follower
+    /// gives there.
+    #[test]
+    fn dragged_contours_match_the_follower_on_random_grids(
+        field in random_field(),
+        start in 0u32..14,
+        pick in 0usize..100,
+        cuts in proptest::collection::vec(0u32..14, 1..6),
+    ) {
+        let tree = tree_of(&field);
+        let from = Isovalue::new(start as f64 / 2.0);
+        let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)
+            .map(ArcId)
+            .filter(|&a| path_seed(&tree, &field, a, from).is_some())
+            .collect();
+        prop_assume!(!spanning.is_empty());
+        let arc = spanning[pick % spanning.len()];
+        let cuts: Vec<Isovalue> = cuts.iter().map(|&c| Isovalue::new(c as f64 / 2.0)).collect();
+        drag_matches_the_follower(&field, &tree, arc, from, &cuts);
+    }
+
+    #[test]
+    fn dragged_contours_match_the_follower_on_noisy_float_grids(
+        dims in (3usize..10, 3usize..10, 3usize..10),
+        seed in any::<u64>(),
+        start in 0.0f64..1.0,
+        pick in 0usize..100,
+        cuts in proptest::collection::vec(0.0f64..1.0, 1..6),
+    ) {
+        let n = dims.0 * dims.1 * dims.2;
+        let mut s = seed | 1;
+        let values: Vec<f32> = (0..n).map(|_| {
+            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }).collect();
+        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let tree = tree_of(&field);
+        let from = Isovalue::new(start);
+        let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)
+            .map(ArcId)
+            .filter(|&a| path_seed(&tree, &field, a, from).is_some())
+            .collect();
+        prop_assume!(!spanning.is_empty());
+        let arc = spanning[pick % spanning.len()];
+        // Small steps (what a drag makes) as well as far ones.
+        let cuts: Vec<Isovalue> = cuts
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| Isovalue::new(if i % 2 == 0 { start + (c - 0.5) * 0.1 } else { c }))
+            .collect();
+        drag_matches_the_follower(&field, &tree, arc, from, &cuts);
+    }
+}
+
+/// The drags above take steps, many across nodes (not only within one
+/// arc): 200 random grids, five cuts each.
+#[test]
+fn drags_cross_nodes_on_random_grids() {
+    let mut s = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move |n: u64| {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s % n
+    };
+    let (mut steps, mut across) = (0, 0);
+    for _ in 0..200 {
+        let d = [
+            4 + next(4) as usize,
+            4 + next(4) as usize,
+            3 + next(4) as usize,
+        ];
+        let values: Vec<u8> = (0..d[0] * d[1] * d[2]).map(|_| next(7) as u8).collect();
+        let field = ScalarField::new(d, Values::U8(values)).expect("valid");
+        let tree = tree_of(&field);
+        let from = Isovalue::new(next(14) as f64 / 2.0);
+        let Some(arc) = (0..tree.arcs().len() as u32)
+            .map(ArcId)
+            .find(|&a| path_seed(&tree, &field, a, from).is_some())
+        else {
+            continue;
+        };
+        let cuts: Vec<Isovalue> = (0..5)
+            .map(|_| Isovalue::new(next(14) as f64 / 2.0))
+            .collect();
+        let n = drag_matches_the_follower(&field, &tree, arc, from, &cuts);
+        steps += n;
+        // Where the first step left the first arc's span.
+        let a = tree.arc(arc);
+        let span = (
+            field.value(tree.node(a.lower).vertex),
+            field.value(tree.node(a.upper).vertex),
+        );
+        across += usize::from(n > 0 && !(span.0 < cuts[0].value && cuts[0].value < span.1));
+    }
+    assert!(steps > 300, "{steps} steps taken");
+    assert!(across > 50, "{across} drags left their first arc");
+}

@@ -346,34 +346,14 @@ impl<'f> ContourFollower<'f> {
 
     /// The tetrahedron holding edge `(a, b)`, if any.
     fn tet_of_edge(&self, a: u32, b: u32) -> Option<TetRef> {
-        let (ca, cb) = (self.field.coords(a), self.field.coords(b));
-        for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
-            for &ma in t {
-                // Cube origin if `a` is corner `ma`.
-                let o: [i64; 3] = std::array::from_fn(|k| ca[k] as i64 - corner(ma)[k]);
-                let inside = (0..3).all(|k| o[k] >= 0 && o[k] + 1 < self.dims[k] as i64);
-                if !inside {
-                    continue;
-                }
-                let rel: [i64; 3] = std::array::from_fn(|k| cb[k] as i64 - o[k]);
-                if rel.iter().any(|&r| !(0..=1).contains(&r)) {
-                    continue;
-                }
-                let mb = (rel[0] | rel[1] << 1 | rel[2] << 2) as u8;
-                if mb != ma && t.contains(&mb) {
-                    let xyz = [o[0] as u32, o[1] as u32, o[2] as u32];
-                    let origin =
-                        (o[0] + self.dims[0] as i64 * (o[1] + self.dims[1] as i64 * o[2])) as u32;
-                    return Some(TetRef {
-                        origin,
-                        xyz,
-                        perm: p as u8,
-                        rec: 0,
-                    });
-                }
-            }
-        }
-        None
+        let (origin, perm) = tet_of_edge(self.field, a, b)?;
+        let xyz = self.field.coords(origin).map(|c| c as u32);
+        Some(TetRef {
+            origin,
+            xyz,
+            perm,
+            rec: 0,
+        })
     }
 
     /// Floods from the seed into `out`; false when more than `limit`
@@ -503,6 +483,33 @@ impl<'f> ContourFollower<'f> {
         }
         Ok(out.indices.len() <= index_limit)
     }
+}
+
+/// A tetrahedron holding mesh edge `(a, b)`, if any: the id of its cube's
+/// lowest corner and its permutation.
+pub(super) fn tet_of_edge(field: &ScalarField, a: u32, b: u32) -> Option<(u32, u8)> {
+    let dims = field.dims();
+    let (ca, cb) = (field.coords(a), field.coords(b));
+    for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
+        for &ma in t {
+            // Cube origin if `a` is corner `ma`.
+            let o: [i64; 3] = std::array::from_fn(|k| ca[k] as i64 - corner(ma)[k]);
+            let inside = (0..3).all(|k| o[k] >= 0 && o[k] + 1 < dims[k] as i64);
+            if !inside {
+                continue;
+            }
+            let rel: [i64; 3] = std::array::from_fn(|k| cb[k] as i64 - o[k]);
+            if rel.iter().any(|&r| !(0..=1).contains(&r)) {
+                continue;
+            }
+            let mb = (rel[0] | rel[1] << 1 | rel[2] << 2) as u8;
+            if mb != ma && t.contains(&mb) {
+                let origin = (o[0] + dims[0] as i64 * (o[1] + dims[1] as i64 * o[2])) as u32;
+                return Some((origin, p as u8));
+            }
+        }
+    }
+    None
 }
 
 #[cfg(test)]

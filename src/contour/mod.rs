@@ -44,6 +44,7 @@
 //! Only 3D grids (every axis at least 2 vertices) have tetrahedra; a 2D
 //! image yields empty contours.
 
+pub mod drag;
 pub mod export;
 pub mod follow;
 pub mod global;
@@ -57,6 +58,7 @@ pub mod topology;
 
 #[doc(no_inline)]
 pub use crate::field::Isovalue;
+pub use drag::DraggedContour;
 pub use follow::{ContourFollower, FollowerScratch};
 pub use global::{all_contours, contours_through, follow_all};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};

@@ -1,0 +1,876 @@
+//! Dragging one contour: its mesh at a new isovalue made from its mesh at
+//! the last one, at the cost of the change rather than of the contour.
+//!
+//! **What changes between two cuts.** Let the contour of arc `a` at cut `h`
+//! move to the contour of arc `c` at cut `h'` (say `h < h'`; downwards is
+//! the mirror image). A tetrahedron's marching-tetrahedra piece depends
+//! only on which of its corners lie above the cut, so a tetrahedron none of
+//! whose corners is *flipped* (above `h`, not above `h'`) is crossed at
+//! `h'` exactly as at `h`, by the same triangles on the same crossed edges
+//! (only the points along those edges move). The flipped vertices that
+//! matter are those of the *slab component*: the part of `{h ≤ f ≤ h'}`
+//! connected to the contour. In the augmented contour tree that is a
+//! connected piece `K` of the tree restricted to `[h, h']`, reached from
+//! `(a, h)`: its arcs, and of each arc the regular vertices and nodes
+//! between the two cuts (a binary search in the arc's sorted vertices). A
+//! tetrahedron with a flipped corner lies wholly in that one slab
+//! component (its part of the slab is convex), so:
+//!
+//! * the contour at `h'` of every arc of `K` spanning `h'` is made of the
+//!   tetrahedra of the contours at `h` of the arcs of `K` spanning `h`
+//!   that have no flipped corner, and of the tetrahedra with a flipped
+//!   corner that `h'` crosses;
+//! * `c`'s contour is that set less the contours of the other arcs of `K`
+//!   spanning `h'` (pieces that split off the dragged contour, followed
+//!   from their path seeds and removed), given that the contours of the
+//!   other arcs of `K` spanning `h` (pieces that join it) were added first
+//!   (followed from their seeds).
+//!
+//! So a step costs the tree walk over `K`, the 24 tetrahedra around each
+//! flipped vertex, the pieces that join or leave, and then passes over the
+//! contour's vertices and triangles that the output needs anyway (every
+//! vertex moves along its edge: positions and normals are recomputed, in
+//! parallel). On an 8-bit scan one value unit flips a few tens of
+//! thousands of vertices of a head surface of 2.7 million.
+//!
+//! **State.** The contour is kept as the follower keeps it while flooding
+//! ([`super::follow`]): a record per mesh vertex it touches (found through
+//! a slot table over the volume, never cleared), holding which tetrahedra
+//! of that vertex's cube are in the contour, where each one's triangles
+//! are, and the contour vertex on each of the 7 mesh edges it owns. The
+//! triangles of a tetrahedron sit in one slot of a pair array (removal
+//! swaps the last pair in); contour vertices count the triangles that use
+//! them and are freed, and their slots reused, when none does.
+//!
+//! **Memory:** 4 bytes per volume vertex (the slots) plus about 60 bytes
+//! per touched mesh vertex, 32 per crossed tetrahedron and 9 per contour
+//! vertex: about 350 MB for a 5.4 M-triangle head surface, held while one
+//! contour is dragged.
+//!
+//! **Cancellation.** A step changes its state without asking (that part is
+//! short); the output passes stop when `cancel` says so, leaving the state
+//! at the new cut, whole, for the next step.
+
+use super::follow::tet_of_edge;
+use super::marching::{
+    Cancelled, TetTables, area_normal, corner, downhill, edge_fraction, normalize, prefer_gradient,
+};
+use super::{ContourMesh, PathSeed, path_seed};
+use crate::field::{Isovalue, Scalar, ScalarField};
+use crate::mesh::CUBE_TETRAHEDRA;
+use crate::tree::{ArcId, ContourTree, NodeId};
+use rayon::prelude::*;
+use std::collections::HashSet;
+
+/// An empty slot (edge without contour vertex, tetrahedron without pair,
+/// freed vertex).
+const NONE: u32 = u32::MAX;
+
+/// What the dragged contour holds at one mesh vertex `v`: the tetrahedra
+/// of the cube whose lowest corner is `v` (bit `p`: permutation `p`), the
+/// pair of triangles of each, and the contour vertex on each of the 7 mesh
+/// edges `(v, v + d)`.
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    vertex: u32,
+    /// Tetrahedra in the contour.
+    tets: u8,
+    /// Tetrahedra queued in this step's re-evaluation.
+    touched: u8,
+    /// Contour vertex on the edge of offset (bit mask) `d`, at `edge[d - 1]`.
+    edge: [u32; 7],
+    /// Pair index of tetrahedron `p`.
+    pair: [u32; 6],
+}
+
+/// The triangles of one crossed tetrahedron.
+#[derive(Clone, Copy, Debug)]
+struct Pair {
+    tris: [[u32; 3]; 2],
+    count: u8,
+    /// A crossed face of it lies on the volume's boundary.
+    boundary: bool,
+    perm: u8,
+    rec: u32,
+}
+
+/// A tetrahedron: the record of its cube's lowest corner and its
+/// permutation.
+#[derive(Clone, Copy, Debug)]
+struct Tet {
+    rec: u32,
+    perm: u8,
+}
+
+/// The 24 tetrahedra around a vertex: (cube corner the vertex is, as a bit
+/// mask; permutation).
+fn star() -> &'static [(u8, u8)] {
+    static S: std::sync::OnceLock<Vec<(u8, u8)>> = std::sync::OnceLock::new();
+    S.get_or_init(|| {
+        let mut s = Vec::new();
+        for (p, t) in CUBE_TETRAHEDRA.iter().enumerate() {
+            for &m in t {
+                s.push((m, p as u8));
+            }
+        }
+        s
+    })
+}
+
+/// Why a step could not be taken from the last contour (the caller then
+/// extracts the new one afresh and starts again from it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refused {
+    /// The new contour is not reached from the last one through the slab
+    /// between the two cuts (another part of the tree).
+    NotConnected,
+    /// The change is as large as the contour: extracting afresh is cheaper.
+    TooLarge,
+}
+
+/// One contour being dragged: its mesh at the last cut, kept so that the
+/// next cut costs what changed (see the module doc). Keep one per dragged
+/// contour; [`DraggedContour::start`] begins at a cut, then
+/// [`DraggedContour::step`] moves it.
+pub struct DraggedContour<'f> {
+    field: &'f ScalarField,
+    dims: [usize; 3],
+    corner_offset: [u32; 8],
+    iso: Isovalue,
+    arc: ArcId,
+    slot: Vec<u32>,
+    records: Vec<Record>,
+    pairs: Vec<Pair>,
+    /// Per contour vertex: its mesh edge (end below, end above), `below ==
+    /// NONE` when free.
+    vedge: Vec<(u32, u32)>,
+    /// Triangles using each contour vertex.
+    refs: Vec<u8>,
+    free: Vec<u32>,
+    /// Pairs with a crossed face on the volume's boundary.
+    boundary: usize,
+    stack: Vec<Tet>,
+}
+
+impl<'f> DraggedContour<'f> {
+    /// The contour through `seed` at `iso`, followed from the seed (on
+    /// this thread) and kept for the steps that follow; None on a 2D grid
+    /// or when the seed's edge is not crossed.
+    pub fn start(
+        field: &'f ScalarField,
+        seed: &PathSeed,
+        iso: Isovalue,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<(Self, ContourMesh)>, Cancelled> {
+        let dims = field.dims();
+        if dims.iter().any(|&d| d < 2) {
+            return Ok(None);
+        }
+        let (sy, sz) = (dims[0] as u32, (dims[0] * dims[1]) as u32);
+        let mut d = Self {
+            field,
+            dims,
+            corner_offset: std::array::from_fn(|m| {
+                (m as u32 & 1) + sy * (m as u32 >> 1 & 1) + sz * (m as u32 >> 2 & 1)
+            }),
+            iso,
+            arc: seed.arc,
+            slot: vec![0; field.len()],
+            records: Vec::new(),
+            pairs: Vec::new(),
+            vedge: Vec::new(),
+            refs: Vec::new(),
+            free: Vec::new(),
+            boundary: 0,
+            stack: Vec::new(),
+        };
+        let Some((origin, perm)) = tet_of_edge(field, seed.below, seed.above) else {
+            return Ok(None);
+        };
+        let start = d.tet(origin, perm);
+        if !crate::with_values!(field.values(), v => d.flood_add(v.as_slice(), start, iso, usize::MAX, cancel))?
+        {
+            return Ok(None);
+        }
+        let mesh = d.mesh(cancel)?;
+        Ok(Some((d, mesh)))
+    }
+
+    /// The cut the kept contour is at.
+    pub fn isovalue(&self) -> Isovalue {
+        self.iso
+    }
+
+    /// The superarc the kept contour belongs to.
+    pub fn arc(&self) -> ArcId {
+        self.arc
+    }
+
+    /// Triangles of the kept contour.
+    pub fn num_triangles(&self) -> usize {
+        self.pairs.iter().map(|p| p.count as usize).sum()
+    }
+
+    /// Moves the kept contour to the contour of `arc` at `iso` and returns
+    /// its mesh: the same oriented triangles on the same shared vertices
+    /// as following `arc`'s path seed at `iso` gives (in another order).
+    /// `Ok(Err(_))` leaves the kept contour as it was when `arc`'s contour
+    /// is not reached through the slab between the two cuts, or when the
+    /// change would cost more than `budget` flipped vertices and
+    /// triangles of joining or leaving pieces; `Err(Cancelled)` leaves it
+    /// at the new cut, whole.
+    pub fn step(
+        &mut self,
+        tree: &ContourTree,
+        arc: ArcId,
+        iso: Isovalue,
+        budget: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Result<ContourMesh, Refused>, Cancelled> {
+        if cancel() {
+            return Err(Cancelled);
+        }
+        let field = self.field;
+        let Some(slab) = Slab::find(tree, field, self.arc, self.iso, iso, budget) else {
+            return Ok(Err(Refused::TooLarge));
+        };
+        if !slab.new.contains(&arc) {
+            return Ok(Err(Refused::NotConnected));
+        }
+        let done = crate::with_values!(field.values(), v => self.apply(v.as_slice(), tree, &slab, arc, iso, budget));
+        if !done {
+            // A joining or leaving piece was larger than the budget: the
+            // kept contour is no longer whole.
+            self.records.clear();
+            self.pairs.clear();
+            self.vedge.clear();
+            self.refs.clear();
+            self.free.clear();
+            self.boundary = 0;
+            return Ok(Err(Refused::TooLarge));
+        }
+        self.iso = iso;
+        self.arc = arc;
+        self.mesh(cancel).map(Ok)
+    }
+
+    /// The changes of one step (see the module doc); false when a piece
+    /// outgrew `budget` (the state is then broken: the caller clears it).
+    fn apply<T: Scalar>(
+        &mut self,
+        values: &[T],
+        tree: &ContourTree,
+        slab: &Slab,
+        arc: ArcId,
+        iso: Isovalue,
+        budget: usize,
+    ) -> bool {
+        let field = self.field;
+        let old = self.iso;
+        let mut left = budget.saturating_sub(slab.flipped);
+        // Pieces that join: the other contours at the old cut.
+        for &x in &slab.old {
+            if x == self.arc {
+                continue;
+            }
+            let Some(start) =
+                path_seed(tree, field, x, old).and_then(|s| tet_of_edge(field, s.below, s.above))
+            else {
+                continue;
+            };
+            let start = self.tet(start.0, start.1);
+            if self.records[start.rec as usize].tets & 1 << start.perm != 0 {
+                continue;
+            }
+            let before = self.pairs.len();
+            if !matches!(
+                self.flood_add(values, start, old, left, &|| false),
+                Ok(true)
+            ) {
+                return false;
+            }
+            left = left.saturating_sub(self.pairs.len() - before);
+        }
+        // Every tetrahedron around a flipped vertex, once.
+        let star = star();
+        let [nx, ny, nz] = self.dims;
+        let mut queued: Vec<Tet> = Vec::with_capacity(8 * slab.flipped);
+        for v in slab.vertices(tree) {
+            let (x, y, z) = (
+                v as usize % nx,
+                v as usize / nx % ny,
+                v as usize / (nx * ny),
+            );
+            for &(m, p) in star {
+                let c = corner(m);
+                let (ox, oy, oz) = (x as i64 - c[0], y as i64 - c[1], z as i64 - c[2]);
+                if ox < 0
+                    || oy < 0
+                    || oz < 0
+                    || ox + 1 >= nx as i64
+                    || oy + 1 >= ny as i64
+                    || oz + 1 >= nz as i64
+                {
+                    continue;
+                }
+                let origin = v - self.corner_offset[m as usize];
+                let r = self.record(origin);
+                let rec = &mut self.records[r];
+                if rec.touched & 1 << p == 0 {
+                    rec.touched |= 1 << p;
+                    queued.push(Tet {
+                        rec: r as u32,
+                        perm: p,
+                    });
+                }
+            }
+        }
+        for &t in &queued {
+            if self.records[t.rec as usize].tets & 1 << t.perm != 0 {
+                self.remove_tet(t);
+            }
+        }
+        for &t in &queued {
+            self.records[t.rec as usize].touched &= !(1 << t.perm);
+            self.add_tet(values, t, iso);
+        }
+        // Pieces that leave: the other contours at the new cut.
+        for &y in &slab.new {
+            if y == arc {
+                continue;
+            }
+            let Some(start) =
+                path_seed(tree, field, y, iso).and_then(|s| tet_of_edge(field, s.below, s.above))
+            else {
+                continue;
+            };
+            let start = self.tet(start.0, start.1);
+            if self.records[start.rec as usize].tets & 1 << start.perm == 0 {
+                // Not in the slab component after all: never expected.
+                return false;
+            }
+            let removed = self.flood_remove(values, start, iso, left);
+            if removed > left {
+                return false;
+            }
+            left -= removed;
+        }
+        true
+    }
+
+    /// The record of vertex `v`, created if absent.
+    #[inline]
+    fn record(&mut self, v: u32) -> usize {
+        let s = self.slot[v as usize] as usize;
+        if s < self.records.len() && self.records[s].vertex == v {
+            return s;
+        }
+        let s = self.records.len();
+        self.records.push(Record {
+            vertex: v,
+            tets: 0,
+            touched: 0,
+            edge: [NONE; 7],
+            pair: [NONE; 6],
+        });
+        self.slot[v as usize] = s as u32;
+        s
+    }
+
+    fn tet(&mut self, origin: u32, perm: u8) -> Tet {
+        Tet {
+            rec: self.record(origin) as u32,
+            perm,
+        }
+    }
+
+    /// Corner ids of tetrahedron `t`.
+    #[inline]
+    fn ids(&self, t: Tet) -> [u32; 4] {
+        let o = self.records[t.rec as usize].vertex;
+        CUBE_TETRAHEDRA[t.perm as usize].map(|c| o + self.corner_offset[c as usize])
+    }
+
+    /// Bit `l`: corner `l` of `t` above `iso`.
+    #[inline]
+    fn mask<T: Scalar>(&self, values: &[T], t: Tet, iso: Isovalue) -> u8 {
+        let ids = self.ids(t);
+        let mut mask = 0;
+        for (l, &v) in ids.iter().enumerate() {
+            mask |= (iso.above_value(values[v as usize].to_f64(), v) as u8) << l;
+        }
+        mask
+    }
+
+    /// The face neighbour of `t` opposite its corner `k`, None outside the
+    /// volume.
+    #[inline]
+    fn neighbour(&mut self, t: Tet, k: usize) -> Option<Tet> {
+        let (d, p) = TetTables::get().neighbour[t.perm as usize][k];
+        let o = self.records[t.rec as usize].vertex as usize;
+        let [nx, ny, nz] = self.dims;
+        let x = [
+            (o % nx) as i64 + d[0],
+            (o / nx % ny) as i64 + d[1],
+            (o / (nx * ny)) as i64 + d[2],
+        ];
+        if x[0] < 0
+            || x[1] < 0
+            || x[2] < 0
+            || x[0] + 1 >= nx as i64
+            || x[1] + 1 >= ny as i64
+            || x[2] + 1 >= nz as i64
+        {
+            return None;
+        }
+        let origin = (x[0] as usize + nx * (x[1] as usize + ny * x[2] as usize)) as u32;
+        Some(self.tet(origin, p))
+    }
+
+    /// Adds `t`'s triangles at `iso` (if it crosses), returning its mask.
+    fn add_tet<T: Scalar>(&mut self, values: &[T], t: Tet, iso: Isovalue) -> u8 {
+        let mask = self.mask(values, t, iso);
+        let (tris, count) = &TetTables::get().cases[t.perm as usize][mask as usize];
+        if *count == 0 {
+            return mask;
+        }
+        let corners = CUBE_TETRAHEDRA[t.perm as usize];
+        let ids = self.ids(t);
+        let mut pair = Pair {
+            tris: [[NONE; 3]; 2],
+            count: *count,
+            boundary: false,
+            perm: t.perm,
+            rec: t.rec,
+        };
+        for (i, tri) in tris[..*count as usize].iter().enumerate() {
+            for (k, &(b, a)) in tri.iter().enumerate() {
+                let (lo, hi) = if b < a { (b, a) } else { (a, b) };
+                let owner = self.record(ids[lo as usize]);
+                let d = (corners[hi as usize] ^ corners[lo as usize]) as usize - 1;
+                let mut idx = self.records[owner].edge[d];
+                if idx == NONE {
+                    let e = (ids[b as usize], ids[a as usize]);
+                    idx = match self.free.pop() {
+                        Some(i) => {
+                            self.vedge[i as usize] = e;
+                            i
+                        }
+                        None => {
+                            self.vedge.push(e);
+                            self.refs.push(0);
+                            (self.vedge.len() - 1) as u32
+                        }
+                    };
+                    self.records[owner].edge[d] = idx;
+                }
+                self.refs[idx as usize] += 1;
+                pair.tris[i][k] = idx;
+            }
+        }
+        for k in 0..4 {
+            if crossed_face(mask, k) && self.neighbour(t, k).is_none() {
+                pair.boundary = true;
+            }
+        }
+        self.boundary += pair.boundary as usize;
+        let rec = &mut self.records[t.rec as usize];
+        rec.tets |= 1 << t.perm;
+        rec.pair[t.perm as usize] = self.pairs.len() as u32;
+        self.pairs.push(pair);
+        mask
+    }
+
+    /// Removes `t` (in the contour) and frees vertices no triangle uses.
+    fn remove_tet(&mut self, t: Tet) {
+        let rec = &mut self.records[t.rec as usize];
+        let i = rec.pair[t.perm as usize] as usize;
+        rec.tets &= !(1 << t.perm);
+        rec.pair[t.perm as usize] = NONE;
+        let pair = self.pairs.swap_remove(i);
+        if let Some(moved) = self.pairs.get(i) {
+            self.records[moved.rec as usize].pair[moved.perm as usize] = i as u32;
+        }
+        self.boundary -= pair.boundary as usize;
+        for tri in &pair.tris[..pair.count as usize] {
+            for &idx in tri {
+                let r = &mut self.refs[idx as usize];
+                *r -= 1;
+                if *r == 0 {
+                    self.free_vertex(idx);
+                }
+            }
+        }
+    }
+
+    fn free_vertex(&mut self, idx: u32) {
+        let (b, a) = self.vedge[idx as usize];
+        let (lo, hi) = (b.min(a), b.max(a));
+        let nx = self.dims[0];
+        let plane = nx * self.dims[1];
+        let (l, h) = (lo as usize, hi as usize);
+        let d = (h % nx != l % nx) as usize
+            | ((h / nx % self.dims[1] != l / nx % self.dims[1]) as usize) << 1
+            | ((h / plane != l / plane) as usize) << 2;
+        let owner = self.slot[lo as usize] as usize;
+        self.records[owner].edge[d - 1] = NONE;
+        self.vedge[idx as usize] = (NONE, NONE);
+        self.free.push(idx);
+    }
+
+    /// Floods from `start` through the tetrahedra `iso` crosses, adding
+    /// those not in the contour yet; false when more than `limit` were
+    /// added (or cancelled: Err).
+    fn flood_add<T: Scalar>(
+        &mut self,
+        values: &[T],
+        start: Tet,
+        iso: Isovalue,
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, Cancelled> {
+        let mut stack = std::mem::take(&mut self.stack);
+        stack.clear();
+        let mut added = 0usize;
+        if self.records[start.rec as usize].tets & 1 << start.perm == 0 {
+            self.add_tet(values, start, iso);
+            added += 1;
+            stack.push(start);
+        }
+        let mut countdown = 1u32 << 14;
+        while let Some(t) = stack.pop() {
+            countdown -= 1;
+            if countdown == 0 {
+                countdown = 1 << 14;
+                if cancel() {
+                    self.stack = stack;
+                    return Err(Cancelled);
+                }
+                if added > limit {
+                    self.stack = stack;
+                    return Ok(false);
+                }
+            }
+            let mask = self.mask(values, t, iso);
+            for k in 0..4 {
+                if !crossed_face(mask, k) {
+                    continue;
+                }
+                if let Some(n) = self.neighbour(t, k)
+                    && self.records[n.rec as usize].tets & 1 << n.perm == 0
+                {
+                    self.add_tet(values, n, iso);
+                    added += 1;
+                    stack.push(n);
+                }
+            }
+        }
+        self.stack = stack;
+        Ok(added <= limit)
+    }
+
+    /// Floods from `start` through the contour's tetrahedra across faces
+    /// `iso` crosses, removing them; returns how many (stops past `limit`).
+    fn flood_remove<T: Scalar>(
+        &mut self,
+        values: &[T],
+        start: Tet,
+        iso: Isovalue,
+        limit: usize,
+    ) -> usize {
+        let mut stack = std::mem::take(&mut self.stack);
+        stack.clear();
+        self.remove_tet(start);
+        stack.push(start);
+        let mut removed = 1;
+        while let Some(t) = stack.pop() {
+            if removed > limit {
+                break;
+            }
+            let mask = self.mask(values, t, iso);
+            for k in 0..4 {
+                if !crossed_face(mask, k) {
+                    continue;
+                }
+                if let Some(n) = self.neighbour(t, k)
+                    && self.records[n.rec as usize].tets & 1 << n.perm != 0
+                {
+                    self.remove_tet(n);
+                    removed += 1;
+                    stack.push(n);
+                }
+            }
+        }
+        self.stack = stack;
+        removed
+    }
+
+    /// The kept contour as a mesh: used vertices numbered in slot order,
+    /// positions and normals at the current cut, triangles in pair order.
+    /// In parallel; cancellable (the state is not changed).
+    fn mesh(&self, cancel: &(dyn Fn() -> bool + Sync)) -> Result<ContourMesh, Cancelled> {
+        let field = self.field;
+        crate::with_values!(field.values(), v => self.mesh_of(v.as_slice(), cancel))
+    }
+
+    fn mesh_of<T: Scalar>(
+        &self,
+        values: &[T],
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<ContourMesh, Cancelled> {
+        const CHUNK: usize = 1 << 15;
+        let n = self.vedge.len();
+        // New vertex ids: used slots in order.
+        let counts: Vec<u32> = self
+            .refs
+            .par_chunks(CHUNK)
+            .map(|c| c.iter().filter(|&&r| r > 0).count() as u32)
+            .collect();
+        let mut base = Vec::with_capacity(counts.len() + 1);
+        let mut s = 0u32;
+        for c in &counts {
+            base.push(s);
+            s += c;
+        }
+        let kept = s as usize;
+        if cancel() {
+            return Err(Cancelled);
+        }
+        let mut renumber = vec![NONE; n];
+        let mut positions = vec![[0f32; 3]; kept];
+        let mut gradients = vec![None; kept];
+        let spacing = self.field.spacing();
+        let dims = self.dims;
+        let iso = self.iso;
+        let coords = |v: u32| {
+            let v = v as usize;
+            [v % dims[0], v / dims[0] % dims[1], v / (dims[0] * dims[1])]
+        };
+        {
+            let mut pos_parts = split(&mut positions, counts.iter().map(|&c| c as usize));
+            let mut grad_parts = split(&mut gradients, counts.iter().map(|&c| c as usize));
+            renumber
+                .par_chunks_mut(CHUNK)
+                .zip(self.refs.par_chunks(CHUNK))
+                .zip(self.vedge.par_chunks(CHUNK))
+                .zip(pos_parts.par_iter_mut())
+                .zip(grad_parts.par_iter_mut())
+                .enumerate()
+                .for_each(|(c, ((((ren, refs), edges), pos), grad))| {
+                    let mut w = 0;
+                    for ((r, &used), &(b, a)) in ren.iter_mut().zip(refs).zip(edges) {
+                        if used == 0 {
+                            continue;
+                        }
+                        *r = base[c] + w as u32;
+                        let (fb, fa) = (values[b as usize].to_f64(), values[a as usize].to_f64());
+                        let s = edge_fraction(iso.value, fb, fa);
+                        let (cb, ca) = (coords(b), coords(a));
+                        pos[w] = std::array::from_fn(|k| {
+                            let (pb, pa) = (cb[k] as f64, ca[k] as f64);
+                            ((pb + s * (pa - pb)) * spacing[k]) as f32
+                        });
+                        grad[w] =
+                            downhill(values, dims, spacing, (b as usize, cb), (a as usize, ca), s);
+                        w += 1;
+                    }
+                });
+        }
+        if cancel() {
+            return Err(Cancelled);
+        }
+        // Triangles in pair order, renumbered.
+        let tri_counts: Vec<usize> = self
+            .pairs
+            .par_chunks(CHUNK)
+            .map(|c| c.iter().map(|p| p.count as usize).sum())
+            .collect();
+        let total: usize = tri_counts.iter().sum();
+        let mut indices = vec![0u32; 3 * total];
+        split(&mut indices, tri_counts.iter().map(|t| 3 * t))
+            .into_par_iter()
+            .zip(self.pairs.par_chunks(CHUNK))
+            .for_each(|(out, pairs)| {
+                let mut w = 0;
+                for p in pairs {
+                    for tri in &p.tris[..p.count as usize] {
+                        for &i in tri {
+                            out[w] = renumber[i as usize];
+                            w += 1;
+                        }
+                    }
+                }
+            });
+        if cancel() {
+            return Err(Cancelled);
+        }
+        // Area-weighted normals: each thread sums its share of the
+        // triangles, then the sums are added.
+        let parts = rayon::current_num_threads().clamp(1, 8);
+        let per = (total.div_ceil(parts)).max(1) * 3;
+        let sums: Vec<Vec<[f32; 3]>> = indices
+            .par_chunks(per)
+            .map(|tris| {
+                let mut acc = vec![[0f32; 3]; kept];
+                for tri in tris.chunks_exact(3) {
+                    let n = area_normal(&positions, tri);
+                    if !n.iter().all(|c| c.is_finite()) {
+                        continue;
+                    }
+                    for &i in tri {
+                        let s = &mut acc[i as usize];
+                        s[0] += n[0];
+                        s[1] += n[1];
+                        s[2] += n[2];
+                    }
+                }
+                acc
+            })
+            .collect();
+        let mut sums = sums.into_iter();
+        let mut normals = sums.next().unwrap_or_else(|| vec![[0f32; 3]; kept]);
+        for other in sums {
+            normals
+                .par_chunks_mut(CHUNK)
+                .zip(other.par_chunks(CHUNK))
+                .for_each(|(n, o)| {
+                    for (n, o) in n.iter_mut().zip(o) {
+                        n[0] += o[0];
+                        n[1] += o[1];
+                        n[2] += o[2];
+                    }
+                });
+        }
+        normals
+            .par_chunks_mut(CHUNK)
+            .zip(gradients.par_chunks(CHUNK))
+            .for_each(|(n, g)| {
+                normalize(n);
+                for (n, g) in n.iter_mut().zip(g) {
+                    prefer_gradient(n, *g);
+                }
+            });
+        Ok(ContourMesh {
+            arc: self.arc,
+            isovalue: self.iso.value,
+            positions,
+            normals,
+            indices,
+            touches_boundary: self.boundary > 0,
+        })
+    }
+}
+
+/// True when the face of a tetrahedron opposite its corner `k` is crossed
+/// (its three corners not all on one side), for the tetrahedron's mask.
+#[inline]
+fn crossed_face(mask: u8, k: usize) -> bool {
+    let others = mask & !(1 << k) & 0xf;
+    others != 0 && others != 0xf & !(1 << k)
+}
+
+/// `s` cut into consecutive pieces of the given lengths.
+fn split<T>(mut s: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    for l in lengths {
+        let (a, b) = s.split_at_mut(l);
+        out.push(a);
+        s = b;
+    }
+    out
+}
+
+/// The slab component of one step: the arcs of the tree restricted to the
+/// values between the two cuts that are reached from the dragged contour,
+/// the vertices that change sides, and the arcs spanning each cut.
+struct Slab {
+    /// Arcs of the component spanning the old cut (the dragged one among
+    /// them).
+    old: Vec<ArcId>,
+    /// Arcs spanning the new cut.
+    new: Vec<ArcId>,
+    /// Per arc: its regular vertices between the cuts (a range of
+    /// `arc_vertices`).
+    ranges: Vec<(ArcId, usize, usize)>,
+    /// Nodes between the cuts.
+    nodes: Vec<NodeId>,
+    /// How many vertices change sides.
+    flipped: usize,
+}
+
+impl Slab {
+    /// Walks the tree from `arc` at `from` towards `to`; None when more
+    /// than `budget` vertices change sides.
+    fn find(
+        tree: &ContourTree,
+        field: &ScalarField,
+        arc: ArcId,
+        from: Isovalue,
+        to: Isovalue,
+        budget: usize,
+    ) -> Option<Slab> {
+        let (lo, hi, up) = if (from.value, from.tie) <= (to.value, to.tie) {
+            (from, to, true)
+        } else {
+            (to, from, false)
+        };
+        let above = |cut: Isovalue, v: u32| cut.is_above(field, v);
+        // Between the cuts: above the lower, not above the higher.
+        let between = |v: u32| above(lo, v) && !above(hi, v);
+        let mut slab = Slab {
+            old: Vec::new(),
+            new: Vec::new(),
+            ranges: Vec::new(),
+            nodes: Vec::new(),
+            flipped: 0,
+        };
+        let mut seen_arcs: HashSet<u32> = HashSet::new();
+        let mut seen_nodes: HashSet<u32> = HashSet::new();
+        let mut queue = vec![arc];
+        seen_arcs.insert(arc.0);
+        while let Some(x) = queue.pop() {
+            let a = tree.arc(x);
+            let (lv, uv) = (tree.node(a.lower).vertex, tree.node(a.upper).vertex);
+            let (spans_lo, spans_hi) = (
+                !above(lo, lv) && above(lo, uv),
+                !above(hi, lv) && above(hi, uv),
+            );
+            if spans_lo {
+                if up { &mut slab.old } else { &mut slab.new }.push(x);
+            }
+            if spans_hi {
+                if up { &mut slab.new } else { &mut slab.old }.push(x);
+            }
+            let verts = tree.arc_vertices(x);
+            let start = verts.partition_point(|&v| !above(lo, v));
+            let end = verts.partition_point(|&v| !above(hi, v));
+            if end > start {
+                slab.ranges.push((x, start, end));
+                slab.flipped += end - start;
+            }
+            for node in [a.lower, a.upper] {
+                if between(tree.node(node).vertex) && seen_nodes.insert(node.0) {
+                    slab.nodes.push(node);
+                    slab.flipped += 1;
+                    for &y in tree.node_arcs(node) {
+                        if seen_arcs.insert(y.0) {
+                            queue.push(y);
+                        }
+                    }
+                }
+            }
+            if slab.flipped > budget {
+                return None;
+            }
+        }
+        Some(slab)
+    }
+
+    /// Every vertex that changes sides.
+    fn vertices<'t>(&'t self, tree: &'t ContourTree) -> impl Iterator<Item = u32> + 't {
+        self.ranges
+            .iter()
+            .flat_map(move |&(x, s, e)| tree.arc_vertices(x)[s..e].iter().copied())
+            .chain(self.nodes.iter().map(move |&n| tree.node(n).vertex))
+    }
+}
