@@ -127,6 +127,12 @@ fn quick() {
     for (name, field) in volumes() {
         let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
         let (iso, seed, triangles) = largest_contour(&tree, &field);
+        if std::env::var("FLEXISO_BENCH_DRAG").as_deref() == Ok("1") {
+            // Only the scripted drags (for profiling).
+            scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
+            drag_latency(&name, &tree, &field, 500_000..=1_000_000);
+            continue;
+        }
         let spanning = spanning_arcs(&tree, &field, iso);
         let seeds = PathSeeds::new();
         let t_seed = best_of(20, || {
@@ -380,6 +386,7 @@ fn scripted_drag(
             upload.push(slowest);
         }
     }
+    incremental_drag(name, tree, field, &chain, iso, dir, steps);
     let stats = |v: &[f64]| {
         let mut v = v.to_vec();
         v.sort_by(f64::total_cmp);
@@ -400,6 +407,100 @@ fn scripted_drag(
         sizes.0,
         sizes.1,
         budget >> 20,
+    );
+}
+
+/// A drag of `steps` steps of `delta` along `chain` from `iso` by
+/// [`DraggedContour`]: each step from the last mesh, at the cost of the
+/// change. Prints the cost of starting (following the contour once and
+/// keeping it) and, per step, new isovalue to mesh ready for upload
+/// (step and preparation), median and worst; checks each mesh's size
+/// against the parallel extraction's.
+fn incremental_drag(
+    name: &str,
+    tree: &ContourTree,
+    field: &ScalarField,
+    chain: &[flexiso::tree::ArcId],
+    iso: Isovalue,
+    delta: f64,
+    steps: usize,
+) {
+    use flexiso::contour::DraggedContour;
+    use flexiso::contour::drag::step_budget;
+    let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, chain, iso) else {
+        return;
+    };
+    let shared = std::sync::Arc::new(field.clone());
+    let t = Instant::now();
+    let Some((mut dragged, first)) =
+        DraggedContour::start(&shared, &seed, iso, &|| false).expect("not cancelled")
+    else {
+        return;
+    };
+    let start = t.elapsed().as_secs_f64() * 1e3;
+    let mut check = ContourFollower::new(field);
+    let (mut times, mut step_only, mut refused) = (vec![], vec![], 0);
+    let mut sizes = (first.num_triangles(), first.num_triangles());
+    let cpu0 = process_cpu();
+    for k in 1..=steps {
+        let iso = Isovalue::new(iso.value + delta * k as f64);
+        let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, chain, iso) else {
+            break;
+        };
+        let t = Instant::now();
+        let budget = step_budget(dragged.num_triangles());
+        let mesh = match dragged
+            .step(tree, seed.arc, iso, budget, &|| false)
+            .expect("not cancelled")
+        {
+            Ok(m) => m,
+            Err(_) => {
+                refused += 1;
+                let (d, m) = DraggedContour::start(&shared, &seed, iso, &|| false)
+                    .expect("not cancelled")
+                    .expect("spans");
+                dragged = d;
+                m
+            }
+        };
+        let s = t.elapsed().as_secs_f64() * 1e3;
+        black_box(prepare(&mesh));
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        step_only.push(s);
+        sizes = (
+            sizes.0.min(mesh.num_triangles()),
+            sizes.1.max(mesh.num_triangles()),
+        );
+        if k == 1 || k == steps {
+            let want = check.extract(&seed, iso, &|| false).expect("not cancelled");
+            assert_eq!(
+                (mesh.num_triangles(), mesh.positions.len()),
+                (want.num_triangles(), want.positions.len()),
+                "the dragged contour is the extracted one"
+            );
+        }
+    }
+    let cpu = cpu0
+        .zip(process_cpu())
+        .map_or(f64::NAN, |(a, b)| (b - a) * 1e3 / times.len().max(1) as f64);
+    let stats = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        (
+            v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
+            v.last().copied().unwrap_or(f64::NAN),
+        )
+    };
+    let ((m, w), (sm, sw)) = (stats(&times), stats(&step_only));
+    println!(
+        "{name}: incremental drag of {} steps of {delta:+} from h = {} ({}..{} triangles): \
+         start {start:.0} ms; new isovalue to mesh ready for upload, median / worst step \
+         {m:.0} / {w:.0} ms (the step alone {sm:.0} / {sw:.0} ms; CPU per step, all threads, \
+         with the checks {cpu:.0} ms); {refused} steps refused and restarted",
+        times.len(),
+        iso.value,
+        sizes.0,
+        sizes.1,
     );
 }
 
@@ -494,6 +595,25 @@ fn drag_latency(
             worst = (extract, upload, render, mesh.num_triangles(), frames);
         }
     }
+    // Steps of one value unit down the arc's chain (100-arc level, by
+    // volume), as a mouse drag makes them.
+    let sim = std::sync::Arc::new(flexiso::simplify::Simplification::new(
+        tree,
+        field,
+        flexiso::simplify::Measure::Volume,
+    ));
+    let mut level = flexiso::simplify::SimplifiedTree::new(sim);
+    level.set_level(100);
+    let chain = match level.live_arc_of(arc) {
+        Some(a) => level.arc(a).chain.to_vec(),
+        None => vec![arc],
+    };
+    let ends = (
+        field.value(tree.node(tree.arc(chain[0]).lower).vertex),
+        field.value(tree.node(tree.arc(chain[chain.len() - 1]).upper).vertex),
+    );
+    let dir = if h - ends.0 > ends.1 - h { -1.0 } else { 1.0 };
+    incremental_drag(name, tree, field, &chain, Isovalue::new(h), dir, 20);
     println!(
         "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
          worst step extraction (and preparation) {:.1} ms + upload {:.1} ms ({} frames) = {:.1} ms; \

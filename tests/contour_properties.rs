@@ -600,8 +600,9 @@ fn drag_matches_the_follower(
         return 0;
     };
     let mut oracle = ContourFollower::new(field);
+    let shared = std::sync::Arc::new(field.clone());
     let Some((mut dragged, first)) =
-        DraggedContour::start(field, &seed, from, &|| false).expect("not cancelled")
+        DraggedContour::start(&shared, &seed, from, &|| false).expect("not cancelled")
     else {
         return 0;
     };

@@ -53,7 +53,8 @@
 
 use super::follow::tet_of_edge;
 use super::marching::{
-    Cancelled, TetTables, area_normal, corner, downhill, edge_fraction, normalize, prefer_gradient,
+    Cancelled, TetTables, area_normal, corner, edge_fraction, end_gradient, interpolated_downhill,
+    normalize, prefer_gradient,
 };
 use super::{ContourMesh, PathSeed, path_seed};
 use crate::field::{Isovalue, Scalar, ScalarField};
@@ -61,6 +62,18 @@ use crate::mesh::CUBE_TETRAHEDRA;
 use crate::tree::{ArcId, ContourTree, NodeId};
 use rayon::prelude::*;
 use std::collections::HashSet;
+use std::sync::Arc;
+use strength_reduce::StrengthReducedU32;
+
+/// The largest change [`DraggedContour::step`] should take on for a
+/// contour of `triangles` triangles (flipped vertices plus the triangles of
+/// joining and leaving pieces), beyond which extracting afresh is cheaper:
+/// a flipped vertex re-evaluates 24 tetrahedra (about 250 ns), the sweep
+/// costs about 110 ns of CPU per triangle of the contour and the follower
+/// 125 ns, so the two meet near half a flip per triangle.
+pub fn step_budget(triangles: usize) -> usize {
+    (triangles / 2).max(4096)
+}
 
 /// An empty slot (edge without contour vertex, tetrahedron without pair,
 /// freed vertex).
@@ -92,6 +105,17 @@ struct Pair {
     boundary: bool,
     perm: u8,
     rec: u32,
+}
+
+/// What a contour vertex needs at every cut, read once when it is made:
+/// the values at its edge's ends (below, above) and the field's gradient
+/// there, so that moving it is a streaming pass.
+#[derive(Clone, Copy, Debug, Default)]
+struct EdgeEnds {
+    fb: f64,
+    fa: f64,
+    gb: [f32; 3],
+    ga: [f32; 3],
 }
 
 /// A tetrahedron: the record of its cube's lowest corner and its
@@ -132,8 +156,8 @@ pub enum Refused {
 /// next cut costs what changed (see the module doc). Keep one per dragged
 /// contour; [`DraggedContour::start`] begins at a cut, then
 /// [`DraggedContour::step`] moves it.
-pub struct DraggedContour<'f> {
-    field: &'f ScalarField,
+pub struct DraggedContour {
+    field: Arc<ScalarField>,
     dims: [usize; 3],
     corner_offset: [u32; 8],
     iso: Isovalue,
@@ -144,20 +168,26 @@ pub struct DraggedContour<'f> {
     /// Per contour vertex: its mesh edge (end below, end above), `below ==
     /// NONE` when free.
     vedge: Vec<(u32, u32)>,
+    /// Per contour vertex: values and gradients at its edge's ends.
+    ends: Vec<EdgeEnds>,
     /// Triangles using each contour vertex.
     refs: Vec<u8>,
     free: Vec<u32>,
     /// Pairs with a crossed face on the volume's boundary.
     boundary: usize,
     stack: Vec<Tet>,
+    /// Per-thread sums of area-weighted normals, kept between steps.
+    sums: Vec<Vec<[f32; 3]>>,
+    div_x: StrengthReducedU32,
+    div_y: StrengthReducedU32,
 }
 
-impl<'f> DraggedContour<'f> {
+impl DraggedContour {
     /// The contour through `seed` at `iso`, followed from the seed (on
     /// this thread) and kept for the steps that follow; None on a 2D grid
     /// or when the seed's edge is not crossed.
     pub fn start(
-        field: &'f ScalarField,
+        field: &Arc<ScalarField>,
         seed: &PathSeed,
         iso: Isovalue,
         cancel: &(dyn Fn() -> bool + Sync),
@@ -168,7 +198,7 @@ impl<'f> DraggedContour<'f> {
         }
         let (sy, sz) = (dims[0] as u32, (dims[0] * dims[1]) as u32);
         let mut d = Self {
-            field,
+            field: Arc::clone(field),
             dims,
             corner_offset: std::array::from_fn(|m| {
                 (m as u32 & 1) + sy * (m as u32 >> 1 & 1) + sz * (m as u32 >> 2 & 1)
@@ -179,10 +209,14 @@ impl<'f> DraggedContour<'f> {
             records: Vec::new(),
             pairs: Vec::new(),
             vedge: Vec::new(),
+            ends: Vec::new(),
             refs: Vec::new(),
             free: Vec::new(),
             boundary: 0,
             stack: Vec::new(),
+            sums: Vec::new(),
+            div_x: StrengthReducedU32::new(dims[0] as u32),
+            div_y: StrengthReducedU32::new(dims[1] as u32),
         };
         let Some((origin, perm)) = tet_of_edge(field, seed.below, seed.above) else {
             return Ok(None);
@@ -230,7 +264,8 @@ impl<'f> DraggedContour<'f> {
         if cancel() {
             return Err(Cancelled);
         }
-        let field = self.field;
+        let field = Arc::clone(&self.field);
+        let field = &*field;
         let Some(slab) = Slab::find(tree, field, self.arc, self.iso, iso, budget) else {
             return Ok(Err(Refused::TooLarge));
         };
@@ -244,6 +279,7 @@ impl<'f> DraggedContour<'f> {
             self.records.clear();
             self.pairs.clear();
             self.vedge.clear();
+            self.ends.clear();
             self.refs.clear();
             self.free.clear();
             self.boundary = 0;
@@ -265,7 +301,8 @@ impl<'f> DraggedContour<'f> {
         iso: Isovalue,
         budget: usize,
     ) -> bool {
-        let field = self.field;
+        let field = Arc::clone(&self.field);
+        let field = &*field;
         let old = self.iso;
         let mut left = budget.saturating_sub(slab.flipped);
         // Pieces that join: the other contours at the old cut.
@@ -295,7 +332,10 @@ impl<'f> DraggedContour<'f> {
         let star = star();
         let [nx, ny, nz] = self.dims;
         let mut queued: Vec<Tet> = Vec::with_capacity(8 * slab.flipped);
-        for v in slab.vertices(tree) {
+        // In id order: neighbouring vertices share records and cache lines.
+        let mut flipped: Vec<u32> = slab.vertices(tree).collect();
+        flipped.sort_unstable();
+        for v in flipped {
             let (x, y, z) = (
                 v as usize % nx,
                 v as usize / nx % ny,
@@ -451,13 +491,16 @@ impl<'f> DraggedContour<'f> {
                 let mut idx = self.records[owner].edge[d];
                 if idx == NONE {
                     let e = (ids[b as usize], ids[a as usize]);
+                    let ends = self.edge_ends(values, e);
                     idx = match self.free.pop() {
                         Some(i) => {
                             self.vedge[i as usize] = e;
+                            self.ends[i as usize] = ends;
                             i
                         }
                         None => {
                             self.vedge.push(e);
+                            self.ends.push(ends);
                             self.refs.push(0);
                             (self.vedge.len() - 1) as u32
                         }
@@ -479,6 +522,27 @@ impl<'f> DraggedContour<'f> {
         rec.pair[t.perm as usize] = self.pairs.len() as u32;
         self.pairs.push(pair);
         mask
+    }
+
+    /// Coordinates of vertex `v`.
+    #[inline]
+    fn coords(&self, v: u32) -> [usize; 3] {
+        let (q, x) = StrengthReducedU32::div_rem(v, self.div_x);
+        let (z, y) = StrengthReducedU32::div_rem(q, self.div_y);
+        [x as usize, y as usize, z as usize]
+    }
+
+    /// Values and gradients at the ends of edge `(below, above)`.
+    fn edge_ends<T: Scalar>(&self, values: &[T], (b, a): (u32, u32)) -> EdgeEnds {
+        let g = |v: u32| {
+            end_gradient(values, self.dims, (v as usize, self.coords(v))).map(|x| x as f32)
+        };
+        EdgeEnds {
+            fb: values[b as usize].to_f64(),
+            fa: values[a as usize].to_f64(),
+            gb: g(b),
+            ga: g(a),
+        }
     }
 
     /// Removes `t` (in the contour) and frees vertices no triangle uses.
@@ -608,16 +672,7 @@ impl<'f> DraggedContour<'f> {
     /// The kept contour as a mesh: used vertices numbered in slot order,
     /// positions and normals at the current cut, triangles in pair order.
     /// In parallel; cancellable (the state is not changed).
-    fn mesh(&self, cancel: &(dyn Fn() -> bool + Sync)) -> Result<ContourMesh, Cancelled> {
-        let field = self.field;
-        crate::with_values!(field.values(), v => self.mesh_of(v.as_slice(), cancel))
-    }
-
-    fn mesh_of<T: Scalar>(
-        &self,
-        values: &[T],
-        cancel: &(dyn Fn() -> bool + Sync),
-    ) -> Result<ContourMesh, Cancelled> {
+    fn mesh(&mut self, cancel: &(dyn Fn() -> bool + Sync)) -> Result<ContourMesh, Cancelled> {
         const CHUNK: usize = 1 << 15;
         let n = self.vedge.len();
         // New vertex ids: used slots in order.
@@ -640,12 +695,8 @@ impl<'f> DraggedContour<'f> {
         let mut positions = vec![[0f32; 3]; kept];
         let mut gradients = vec![None; kept];
         let spacing = self.field.spacing();
-        let dims = self.dims;
+        let inverse = spacing.map(f64::recip);
         let iso = self.iso;
-        let coords = |v: u32| {
-            let v = v as usize;
-            [v % dims[0], v / dims[0] % dims[1], v / (dims[0] * dims[1])]
-        };
         {
             let mut pos_parts = split(&mut positions, counts.iter().map(|&c| c as usize));
             let mut grad_parts = split(&mut gradients, counts.iter().map(|&c| c as usize));
@@ -653,25 +704,30 @@ impl<'f> DraggedContour<'f> {
                 .par_chunks_mut(CHUNK)
                 .zip(self.refs.par_chunks(CHUNK))
                 .zip(self.vedge.par_chunks(CHUNK))
+                .zip(self.ends.par_chunks(CHUNK))
                 .zip(pos_parts.par_iter_mut())
                 .zip(grad_parts.par_iter_mut())
                 .enumerate()
-                .for_each(|(c, ((((ren, refs), edges), pos), grad))| {
+                .for_each(|(c, (((((ren, refs), edges), ends), pos), grad))| {
                     let mut w = 0;
-                    for ((r, &used), &(b, a)) in ren.iter_mut().zip(refs).zip(edges) {
+                    for (((r, &used), &(b, a)), e) in ren.iter_mut().zip(refs).zip(edges).zip(ends)
+                    {
                         if used == 0 {
                             continue;
                         }
                         *r = base[c] + w as u32;
-                        let (fb, fa) = (values[b as usize].to_f64(), values[a as usize].to_f64());
-                        let s = edge_fraction(iso.value, fb, fa);
-                        let (cb, ca) = (coords(b), coords(a));
+                        let s = edge_fraction(iso.value, e.fb, e.fa);
+                        let (cb, ca) = (self.coords(b), self.coords(a));
                         pos[w] = std::array::from_fn(|k| {
                             let (pb, pa) = (cb[k] as f64, ca[k] as f64);
                             ((pb + s * (pa - pb)) * spacing[k]) as f32
                         });
-                        grad[w] =
-                            downhill(values, dims, spacing, (b as usize, cb), (a as usize, ca), s);
+                        grad[w] = interpolated_downhill(
+                            e.gb.map(f64::from),
+                            e.ga.map(f64::from),
+                            s,
+                            inverse,
+                        );
                         w += 1;
                     }
                 });
@@ -708,10 +764,13 @@ impl<'f> DraggedContour<'f> {
         // triangles, then the sums are added.
         let parts = rayon::current_num_threads().clamp(1, 8);
         let per = (total.div_ceil(parts)).max(1) * 3;
-        let sums: Vec<Vec<[f32; 3]>> = indices
-            .par_chunks(per)
-            .map(|tris| {
-                let mut acc = vec![[0f32; 3]; kept];
+        let mut sums = std::mem::take(&mut self.sums);
+        sums.resize_with(indices.chunks(per).len(), Vec::new);
+        sums.par_iter_mut()
+            .zip(indices.par_chunks(per))
+            .for_each(|(acc, tris)| {
+                acc.clear();
+                acc.resize(kept, [0.0; 3]);
                 for tri in tris.chunks_exact(3) {
                     let n = area_normal(&positions, tri);
                     if !n.iter().all(|c| c.is_finite()) {
@@ -724,12 +783,9 @@ impl<'f> DraggedContour<'f> {
                         s[2] += n[2];
                     }
                 }
-                acc
-            })
-            .collect();
-        let mut sums = sums.into_iter();
-        let mut normals = sums.next().unwrap_or_else(|| vec![[0f32; 3]; kept]);
-        for other in sums {
+            });
+        let mut normals = vec![[0f32; 3]; kept];
+        for other in &sums {
             normals
                 .par_chunks_mut(CHUNK)
                 .zip(other.par_chunks(CHUNK))
@@ -741,6 +797,7 @@ impl<'f> DraggedContour<'f> {
                     }
                 });
         }
+        self.sums = sums;
         normals
             .par_chunks_mut(CHUNK)
             .zip(gradients.par_chunks(CHUNK))

@@ -257,26 +257,50 @@ pub(crate) fn downhill<T: Scalar>(
     above: (usize, [usize; 3]),
     s: f64,
 ) -> Option<[f32; 3]> {
-    let stride = [1, dims[0], dims[0] * dims[1]];
-    // Differences per index step (the spacing is applied once, after the
-    // interpolation, and the length by one reciprocal: divisions cost
-    // more than the rest of a vertex's arithmetic).
-    let gradient = |(v, c): (usize, [usize; 3])| -> [f64; 3] {
-        std::array::from_fn(|k| {
-            if c[k] > 0 && c[k] + 1 < dims[k] {
-                0.5 * (values[v + stride[k]].to_f64() - values[v - stride[k]].to_f64())
-            } else if c[k] > 0 {
-                values[v].to_f64() - values[v - stride[k]].to_f64()
-            } else if c[k] + 1 < dims[k] {
-                values[v + stride[k]].to_f64() - values[v].to_f64()
-            } else {
-                0.0
-            }
-        })
-    };
-    let (gb, ga) = (gradient(below), gradient(above));
+    let (gb, ga) = (
+        end_gradient(values, dims, below),
+        end_gradient(values, dims, above),
+    );
     // Loop-invariant where this is inlined into a loop over vertices.
     let inverse = spacing.map(f64::recip);
+    interpolated_downhill(gb, ga, s, inverse)
+}
+
+/// The field's gradient at vertex `v` (id and coordinates) per index step:
+/// central differences, one-sided on the box's faces (the spacing is
+/// applied after the interpolation, by [`interpolated_downhill`]).
+#[inline]
+pub(crate) fn end_gradient<T: Scalar>(
+    values: &[T],
+    dims: [usize; 3],
+    (v, c): (usize, [usize; 3]),
+) -> [f64; 3] {
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    std::array::from_fn(|k| {
+        if c[k] > 0 && c[k] + 1 < dims[k] {
+            0.5 * (values[v + stride[k]].to_f64() - values[v - stride[k]].to_f64())
+        } else if c[k] > 0 {
+            values[v].to_f64() - values[v - stride[k]].to_f64()
+        } else if c[k] + 1 < dims[k] {
+            values[v + stride[k]].to_f64() - values[v].to_f64()
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The unit downhill direction a fraction `s` of the way between two
+/// [`end_gradient`]s, given the reciprocal spacing; None where it
+/// vanishes.
+#[inline]
+pub(crate) fn interpolated_downhill(
+    gb: [f64; 3],
+    ga: [f64; 3],
+    s: f64,
+    inverse: [f64; 3],
+) -> Option<[f32; 3]> {
+    // Divisions cost more than the rest of a vertex's arithmetic: the
+    // length by one reciprocal.
     let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])) * inverse[k]);
     let l2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
     (l2 > 0.0 && l2.is_finite()).then(|| {
