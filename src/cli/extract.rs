@@ -195,7 +195,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let t = Instant::now();
     bar.stage("extraction");
     let meshes = match seeds.as_slice() {
-        [seed] => vec![ContourFollower::new(field).follow(seed, iso)],
+        // One contour on every core when it is large (the follower hands a
+        // large one to the parallel sweep; see ContourFollower::extract).
+        [seed] => vec![
+            ContourFollower::new(field)
+                .extract(seed, iso, &|| false)
+                .unwrap_or_else(|_| ContourMesh::empty(seed.arc, iso.value)),
+        ],
         _ => contour::contours_through(&tree, field, &seeds, iso),
     };
     let extract = t.elapsed().as_secs_f64();
@@ -222,7 +228,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "extract:  h = {h}: {} contour(s), {triangles} triangles in {extract:.4} s ({:.2} M triangles/s{})",
         contours.len(),
         triangles as f64 / extract.max(1e-9) / 1e6,
-        if seeds.len() == 1 { ", one thread" } else { "" }
+        if seeds.len() == 1 {
+            format!(", {} threads", rayon::current_num_threads())
+        } else {
+            String::new()
+        }
     );
 
     let t = Instant::now();
