@@ -365,14 +365,21 @@ impl DraggedContour {
                 }
             }
         }
+        // Old triangles out, new ones in, and only then the vertices
+        // no triangle uses any more freed: a vertex whose edge stays
+        // crossed keeps its slot and its edge ends.
+        let mut detached = Vec::new();
         for &t in &queued {
             if self.records[t.rec as usize].tets & 1 << t.perm != 0 {
-                self.remove_tet(t);
+                detached.push(self.detach_tet(t));
             }
         }
         for &t in &queued {
             self.records[t.rec as usize].touched &= !(1 << t.perm);
             self.add_tet(values, t, iso);
+        }
+        for pair in &detached {
+            self.release(pair);
         }
         // Pieces that leave: the other contours at the new cut.
         for &y in &slab.new {
@@ -547,6 +554,12 @@ impl DraggedContour {
 
     /// Removes `t` (in the contour) and frees vertices no triangle uses.
     fn remove_tet(&mut self, t: Tet) {
+        let pair = self.detach_tet(t);
+        self.release(&pair);
+    }
+
+    /// Takes `t`'s triangles out of the contour (their vertices stay).
+    fn detach_tet(&mut self, t: Tet) -> Pair {
         let rec = &mut self.records[t.rec as usize];
         let i = rec.pair[t.perm as usize] as usize;
         rec.tets &= !(1 << t.perm);
@@ -556,6 +569,11 @@ impl DraggedContour {
             self.records[moved.rec as usize].pair[moved.perm as usize] = i as u32;
         }
         self.boundary -= pair.boundary as usize;
+        pair
+    }
+
+    /// Drops the uses of a detached pair's vertices, freeing unused ones.
+    fn release(&mut self, pair: &Pair) {
         for tri in &pair.tris[..pair.count as usize] {
             for &idx in tri {
                 let r = &mut self.refs[idx as usize];
