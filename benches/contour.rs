@@ -387,14 +387,6 @@ fn scripted_drag(
         }
     }
     incremental_drag(name, tree, field, &chain, iso, dir, steps);
-    let stats = |v: &[f64]| {
-        let mut v = v.to_vec();
-        v.sort_by(f64::total_cmp);
-        (
-            v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
-            v.last().copied().unwrap_or(f64::NAN),
-        )
-    };
     let ((sm, sw), (pm, pw)) = (stats(&ser), stats(&par));
     let ((fm, fw), (um, uw)) = (stats(&frames), stats(&upload));
     println!(
@@ -408,6 +400,16 @@ fn scripted_drag(
         sizes.1,
         budget >> 20,
     );
+}
+
+/// Median and largest of `v` (NaN when empty).
+fn stats(v: &[f64]) -> (f64, f64) {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    (
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
+        v.last().copied().unwrap_or(f64::NAN),
+    )
 }
 
 /// A drag of `steps` steps of `delta` along `chain` from `iso` by
@@ -483,14 +485,6 @@ fn incremental_drag(
     let cpu = cpu0
         .zip(process_cpu())
         .map_or(f64::NAN, |(a, b)| (b - a) * 1e3 / times.len().max(1) as f64);
-    let stats = |v: &[f64]| {
-        let mut v = v.to_vec();
-        v.sort_by(f64::total_cmp);
-        (
-            v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
-            v.last().copied().unwrap_or(f64::NAN),
-        )
-    };
     let ((m, w), (sm, sw)) = (stats(&times), stats(&step_only));
     println!(
         "{name}: incremental drag of {} steps of {delta:+} from h = {} ({}..{} triangles): \

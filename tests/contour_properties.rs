@@ -153,6 +153,22 @@ fn triangle_soup(c: &ContourMesh) -> Vec<[[u32; 3]; 3]> {
     soup
 }
 
+/// A float32 field of `dims` with values from a xorshift of `seed`, in
+/// [0, 1): no ties.
+fn noisy_field(dims: (usize, usize, usize), seed: u64) -> ScalarField {
+    let n = dims.0 * dims.1 * dims.2;
+    let mut s = seed | 1;
+    let values: Vec<f32> = (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        })
+        .collect();
+    ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid")
+}
+
 fn random_field() -> impl Strategy<Value = ScalarField> {
     (2usize..7, 2usize..7, 2usize..7).prop_flat_map(|(x, y, z)| {
         proptest::collection::vec(0u8..7, x * y * z)
@@ -189,13 +205,7 @@ proptest! {
         seed in any::<u64>(),
         t in 0.0f64..1.0,
     ) {
-        let n = dims.0 * dims.1 * dims.2;
-        let mut s = seed | 1;
-        let values: Vec<f32> = (0..n).map(|_| {
-            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }).collect();
-        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let field = noisy_field(dims, seed);
         let tree = tree_of(&field);
         let betti = ContourTopology::new(&tree, &field);
         check_all(&field, &tree, &betti, Isovalue::new(t));
@@ -504,13 +514,7 @@ proptest! {
         t in 0.0f64..1.0,
         limit in prop_oneof![Just(0usize), Just(20), Just(usize::MAX)],
     ) {
-        let n = dims.0 * dims.1 * dims.2;
-        let mut s = seed | 1;
-        let values: Vec<f32> = (0..n).map(|_| {
-            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }).collect();
-        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let field = noisy_field(dims, seed);
         let tree = tree_of(&field);
         let betti = ContourTopology::new(&tree, &field);
         let iso = Isovalue::new(t);
@@ -678,13 +682,7 @@ proptest! {
         pick in 0usize..100,
         cuts in proptest::collection::vec(0.0f64..1.0, 1..6),
     ) {
-        let n = dims.0 * dims.1 * dims.2;
-        let mut s = seed | 1;
-        let values: Vec<f32> = (0..n).map(|_| {
-            s ^= s << 13; s ^= s >> 7; s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }).collect();
-        let field = ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid");
+        let field = noisy_field(dims, seed);
         let tree = tree_of(&field);
         let from = Isovalue::new(start);
         let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)

@@ -73,8 +73,8 @@
 
 use super::follow::tet_of_edge;
 use super::marching::{
-    Cancelled, TetTables, area_normal, corner, edge_fraction, end_gradient, interpolated_downhill,
-    normalize, prefer_gradient,
+    Cancelled, TetTables, add_area_normals, corner, edge_fraction, end_gradient,
+    interpolated_downhill, normalize, prefer_gradient,
 };
 use super::{ContourMesh, PathSeed, path_seed};
 use crate::field::{Isovalue, Scalar, ScalarField};
@@ -809,18 +809,7 @@ impl DraggedContour {
             .for_each(|(acc, tris)| {
                 acc.clear();
                 acc.resize(kept, [0.0; 3]);
-                for tri in tris.chunks_exact(3) {
-                    let n = area_normal(&positions, tri);
-                    if !n.iter().all(|c| c.is_finite()) {
-                        continue;
-                    }
-                    for &i in tri {
-                        let s = &mut acc[i as usize];
-                        s[0] += n[0];
-                        s[1] += n[1];
-                        s[2] += n[2];
-                    }
-                }
+                add_area_normals(acc, &positions, tris);
             });
         let mut normals = vec![[0f32; 3]; kept];
         for other in &sums {

@@ -327,6 +327,15 @@ pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
 /// this function, and the sweep adds the same [`area_normal`]s.
 pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![[0f32; 3]; positions.len()];
+    add_area_normals(&mut acc, positions, indices);
+    normalize(&mut acc);
+    acc
+}
+
+/// Adds each triangle's [`area_normal`] to its three vertices' sums in
+/// `acc` (triangles with a corner out of range or a non-finite normal are
+/// skipped).
+pub(crate) fn add_area_normals(acc: &mut [[f32; 3]], positions: &[[f32; 3]], indices: &[u32]) {
     for tri in indices.chunks_exact(3) {
         if tri.iter().any(|&i| i as usize >= positions.len()) {
             continue;
@@ -342,8 +351,6 @@ pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> 
             s[2] += n[2];
         }
     }
-    normalize(&mut acc);
-    acc
 }
 
 /// Twice the area times the unit normal of triangle `tri` (counter-
