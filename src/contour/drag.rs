@@ -53,16 +53,16 @@
 //! load 3-4): on the colin27_ch2 head (5.4-5.7 M triangles, steps of +1
 //! from h = 64 along its chain at the 100-arc level) a step flips 33-38 k
 //! vertices, re-evaluates 745-790 k tetrahedra and joins or drops 10-30 k
-//! tetrahedra of other pieces, yet costs 700-750 ms (median) against
-//! 500-620 ms for extracting the head afresh on both cores in the same
+//! tetrahedra of other pieces, yet costs 700-911 ms (median) against
+//! 492-619 ms for extracting the head afresh on both cores in the same
 //! run. The change itself takes 200-300 ms (the records, pairs and
 //! vertices it touches lie scattered in memory: about 300 ns per
 //! tetrahedron), and the output passes 400 ms more: every vertex moves, so
 //! positions, normals and triangles are rewritten, and the pairs and
 //! vertex slots, in flood order and reshuffled by every step, are visited
 //! in an order the caches cannot follow (the sweep walks the volume plane
-//! by plane). On a 0.8 M-triangle contour a step costs 59-63 ms against
-//! 90-106 ms following it serially. The next step is keeping pairs and
+//! by plane). On a 0.8 M-triangle contour a step costs 43-69 ms against
+//! 89-187 ms following it serially (longer steps). The next step is keeping pairs and
 //! vertices in volume order (the sweep's), so that both the change and
 //! the output stream; until then [`super::ContourFollower::extract`] stays
 //! the explorer's path.
