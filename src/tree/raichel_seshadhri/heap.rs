@@ -41,6 +41,35 @@ impl PairingHeaps {
         }
     }
 
+    /// An arena of `len` entries to be filled by [`Self::set`], each its own
+    /// one-entry heap once set.
+    pub fn with_len(len: usize) -> Self {
+        Self {
+            entries: vec![
+                Entry {
+                    vertex: NONE,
+                    item: NONE,
+                    child: NONE,
+                    sibling: NONE,
+                };
+                len
+            ],
+            scratch: Vec::new(),
+        }
+    }
+
+    /// Makes entry `e` (of [`Self::with_len`]) the one-entry heap holding
+    /// vertex `v` with the name `item`: the caller chooses where entries lie,
+    /// so that those melded together early lie together in memory.
+    pub fn set(&mut self, e: u32, v: u32, item: u32) {
+        self.entries[e as usize] = Entry {
+            vertex: v,
+            item,
+            child: NONE,
+            sibling: NONE,
+        };
+    }
+
     /// A new one-entry heap holding vertex `v` (compared by the order) with
     /// a name `item` for the caller (what [`Self::top`] returns).
     pub fn singleton(&mut self, v: u32, item: u32) -> u32 {
