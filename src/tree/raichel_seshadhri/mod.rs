@@ -461,7 +461,7 @@ pub fn build<O: CountingOrder + ?Sized>(
             return u;
         }
     };
-    let walk = SuperarcWalk::new(&nodes, &arcs);
+    let walk = SuperarcWalk::new(&nodes, &arcs, |v| values.key(v));
     // Both passes below run on all cores over chunks of ids. A vertex's
     // descent minimum and its superarc are facts of the field, not of the
     // path that reached them, so two threads that meet on one chain store
@@ -501,9 +501,13 @@ pub fn build<O: CountingOrder + ?Sized>(
                     // Most vertices lie on the first arc; past it, a search
                     // by jump pointers along the rest of the path (see
                     // SuperarcWalk).
+                    // (Keys kept in the walk's records: no field reads but
+                    // y's own.)
+                    let ky = values.key(y);
                     let lower_end = arcs[arc as usize].lower.0;
-                    if !values.above(y, nodes[lower_end as usize].vertex) {
-                        arc = walk.locate(lower_end, m, |x| values.above(x, y));
+                    let rl = &walk.rec[lower_end as usize];
+                    if values.above_keys(rl.key, rl.vertex, ky, y) {
+                        arc = walk.locate(lower_end, m, |k, x| values.above_keys(k, x, ky, y));
                     }
                     place_a[y as usize].store(arc, Relaxed);
                     from = arc;
@@ -664,7 +668,7 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
 /// The superarc tree rooted at the global minimum, with Euler-tour
 /// intervals, to choose at a node the down arc that leads towards a given
 /// minimum without comparing values.
-struct SuperarcWalk {
+struct SuperarcWalk<K> {
     /// Per node, its down arcs.
     down_off: Vec<u32>,
     down: Vec<u32>,
@@ -672,16 +676,18 @@ struct SuperarcWalk {
     lower: Vec<u32>,
     /// Per node, what a search step reads, in one record (separate arrays
     /// made every step of a search four or five cache misses).
-    rec: Vec<NodeRec>,
+    rec: Vec<NodeRec<K>>,
 }
 
-/// One node of [`SuperarcWalk`]: its vertex, parent in the rooted tree and
+/// One node of [`SuperarcWalk`]: its vertex and the vertex's key (what a
+/// search compares, read here and not from the field), parent in the rooted tree and
 /// the arc to it, depth and Myers' jump pointer (an ancestor whose depth
 /// depends on the node's depth only, so that any monotone search along the
 /// ancestors takes O(log depth) steps), and its Euler-tour interval.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 #[repr(C, align(32))]
-struct NodeRec {
+struct NodeRec<K> {
+    key: K,
     vertex: u32,
     parent: u32,
     jump: u32,
@@ -691,8 +697,8 @@ struct NodeRec {
     tout: u32,
 }
 
-impl SuperarcWalk {
-    fn new(nodes: &[Node], arcs: &[Superarc]) -> Self {
+impl<K: Copy> SuperarcWalk<K> {
+    fn new(nodes: &[Node], arcs: &[Superarc], key: impl Fn(u32) -> K) -> Self {
         let k = nodes.len();
         let mut down_off = vec![0u32; k + 1];
         let mut deg = vec![0u32; k + 1];
@@ -724,13 +730,17 @@ impl SuperarcWalk {
         }
         let lower = arcs.iter().map(|a| a.lower.0).collect();
         // Nodes are in vertex order: node 0 is the global minimum.
-        let mut rec: Vec<NodeRec> = nodes
+        let mut rec: Vec<NodeRec<K>> = nodes
             .iter()
             .map(|n| NodeRec {
+                key: key(n.vertex),
                 vertex: n.vertex,
                 parent: NONE,
+                jump: 0,
+                depth: 0,
                 parent_arc: NONE,
-                ..NodeRec::default()
+                tin: 0,
+                tout: 0,
             })
             .collect();
         if k > 0 {
@@ -794,29 +804,30 @@ impl SuperarcWalk {
     }
 
     /// The arc at a height on the monotone path from node `s` down to the
-    /// minimum `m`: `above(x)` says whether the vertex x of a node is above
-    /// that height (true at `s`, false at `m`). The path climbs from `s` to
+    /// minimum `m`: `above(k, x)` says whether the vertex x (of key k) of a
+    /// node is above that height (true at `s`, false at `m`). The path climbs from `s` to
     /// the common ancestor c and descends to `m`; along each part `above`
     /// changes once, and jump pointers find the change in O(log depth)
     /// comparisons. (A walk of a few nodes from each part's start before
     /// the jumps was tried: on tooth the change is rarely near, and it
     /// raised locating from 12.6 to 14.2 comparisons per vertex.)
-    fn locate(&self, s: u32, m: u32, mut above: impl FnMut(u32) -> bool) -> u32 {
+    fn locate(&self, s: u32, m: u32, mut above: impl FnMut(K, u32) -> bool) -> u32 {
         let c = self.ancestor_over(s, m);
         let rc = &self.rec[c as usize];
         let dc = rc.depth;
-        if c != s && !above(rc.vertex) {
+        if c != s && !above(rc.key, rc.vertex) {
             // On s's side: the last ancestor of s above the height.
             let mut x = s;
             loop {
                 let rx = &self.rec[x as usize];
                 let rj = &self.rec[rx.jump as usize];
-                if rj.depth > dc && above(rj.vertex) {
+                if rj.depth > dc && above(rj.key, rj.vertex) {
                     x = rx.jump;
                     continue;
                 }
                 let p = rx.parent;
-                if p != c && above(self.rec[p as usize].vertex) {
+                let rp = &self.rec[p as usize];
+                if p != c && above(rp.key, rp.vertex) {
                     x = p;
                     continue;
                 }
@@ -828,12 +839,13 @@ impl SuperarcWalk {
         loop {
             let rx = &self.rec[x as usize];
             let rj = &self.rec[rx.jump as usize];
-            if rj.depth > dc && !above(rj.vertex) {
+            if rj.depth > dc && !above(rj.key, rj.vertex) {
                 x = rx.jump;
                 continue;
             }
             let p = rx.parent;
-            if p != c && !above(self.rec[p as usize].vertex) {
+            let rp = &self.rec[p as usize];
+            if p != c && !above(rp.key, rp.vertex) {
                 x = p;
                 continue;
             }

@@ -32,8 +32,8 @@
 //! Memory: 4 bytes per vertex of paint and 4 of BFS queue (both freed on
 //! return), 16 bytes per heap entry, 17 per colour.
 
+use super::count::CountingOrder;
 use super::heap::{self, PairingHeaps};
-use crate::field::VertexOrder;
 use crate::mesh::FreudenthalGrid;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -95,7 +95,7 @@ fn find(uf: &mut [u32], mut c: u32) -> u32 {
 /// Paints the mesh and builds the critical join tree in the orientation
 /// `order` (the field's own order for the join tree, [`super::count::Inverted`]
 /// for the split tree).
-pub fn critical_join_tree<O: VertexOrder + ?Sized>(
+pub fn critical_join_tree<O: CountingOrder + ?Sized>(
     m: &Orientation<'_>,
     order: &O,
     progress: &Progress,
@@ -198,7 +198,8 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
     for c in 0..colours {
         start[c + 1] += start[c];
     }
-    let mut heaps = PairingHeaps::with_len(start[colours] as usize);
+    let blank = order.key(m.critical.first().copied().unwrap_or(0));
+    let mut heaps = PairingHeaps::with_len(start[colours] as usize, blank);
     let mut fill = start.clone();
     for (i, &v) in m.critical.iter().enumerate() {
         let up = m.upper[v as usize] as u32;
@@ -209,7 +210,7 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         remaining += 1;
         m.grid.link_components(up, |k| {
             let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
-            heaps.set(fill[c], v, i as u32);
+            heaps.set(fill[c], order.key(v), i as u32);
             fill[c] += 1;
         });
     }
