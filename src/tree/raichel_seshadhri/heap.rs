@@ -179,4 +179,73 @@ mod tests {
         });
         assert_eq!(popped, expected);
     }
+
+    use crate::tree::raichel_seshadhri::count::{Counted, CountingOrder, Inverted};
+    use proptest::prelude::*;
+
+    /// Vertices with many ties, spread over `k` heaps laid out by
+    /// [`PairingHeaps::with_len`] and [`PairingHeaps::set`] (grouped per
+    /// heap, as the painting lays them out), melded, then popped: the
+    /// vertices come out in the order's descending order, ties by id, under
+    /// the order and under its inverse, with one counted comparison per
+    /// meld.
+    fn pops_in_order<O: CountingOrder + ?Sized>(order: &O, n: u32, heap_of: &[u32], k: u32) {
+        let mut start = vec![0u32; k as usize + 1];
+        for &h in heap_of {
+            start[h as usize + 1] += 1;
+        }
+        for h in 0..k as usize {
+            start[h + 1] += start[h];
+        }
+        let mut heaps = PairingHeaps::with_len(n as usize, order.key(0));
+        let mut fill = start.clone();
+        for v in 0..n {
+            let h = heap_of[v as usize] as usize;
+            heaps.set(fill[h], order.key(v), v);
+            fill[h] += 1;
+        }
+        let mut all = NONE;
+        for h in 0..k as usize {
+            let mut r = NONE;
+            for e in start[h]..start[h + 1] {
+                r = heaps.meld(r, e, order);
+            }
+            all = heaps.meld(all, r, order);
+        }
+        let mut popped = Vec::new();
+        while let Some(v) = heaps.top(all) {
+            popped.push(v);
+            all = heaps.pop(all, order);
+        }
+        let mut expected: Vec<u32> = (0..n).collect();
+        expected.sort_by(|&a, &b| {
+            if order.above(a, b) {
+                std::cmp::Ordering::Less
+            } else {
+                std::cmp::Ordering::Greater
+            }
+        });
+        assert_eq!(popped, expected);
+    }
+
+    proptest! {
+        #[test]
+        fn grouped_heaps_pop_in_order_by_their_keys(
+            (values, heap_of, k) in (1usize..300, 1u32..12).prop_flat_map(|(n, k)| (
+                proptest::collection::vec(0u8..6, n),
+                proptest::collection::vec(0..k, n),
+                Just(k),
+            ))
+        ) {
+            let n = values.len() as u32;
+            let plain = values.as_slice();
+            pops_in_order(plain, n, &heap_of, k);
+            pops_in_order(&Inverted(plain), n, &heap_of, k);
+            // Counted: the same answers, and every comparison through
+            // above_keys is counted.
+            let counted = Counted::new(plain);
+            pops_in_order(&counted, n, &heap_of, k);
+            prop_assert!(counted.comparisons() > 0 || n == 1);
+        }
+    }
 }

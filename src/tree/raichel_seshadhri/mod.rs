@@ -788,52 +788,49 @@ impl<K: Copy> SuperarcWalk<K> {
         }
     }
 
-    /// The lowest ancestor of `s` (inclusive) whose subtree holds `m`: by
-    /// jump pointers and Euler-tour intervals, no comparisons.
-    fn ancestor_over(&self, s: u32, m: u32) -> u32 {
-        let mut x = s;
-        while !self.in_subtree(m, x) {
-            let j = self.rec[x as usize].jump;
-            x = if self.in_subtree(m, j) {
-                self.rec[x as usize].parent
-            } else {
-                j
-            };
-        }
-        x
-    }
-
     /// The arc at a height on the monotone path from node `s` down to the
     /// minimum `m`: `above(k, x)` says whether the vertex x (of key k) of a
     /// node is above that height (true at `s`, false at `m`). The path climbs from `s` to
     /// the common ancestor c and descends to `m`; along each part `above`
     /// changes once, and jump pointers find the change in O(log depth)
-    /// comparisons. (A walk of a few nodes from each part's start before
+    /// comparisons; whether the subtree of a node holds `m` (Euler-tour
+    /// intervals, no comparison) tells the two parts apart. (A walk of a few nodes from each part's start before
     /// the jumps was tried: on tooth the change is rarely near, and it
     /// raised locating from 12.6 to 14.2 comparisons per vertex.)
     fn locate(&self, s: u32, m: u32, mut above: impl FnMut(K, u32) -> bool) -> u32 {
-        let c = self.ancestor_over(s, m);
-        let rc = &self.rec[c as usize];
-        let dc = rc.depth;
-        if c != s && !above(rc.key, rc.vertex) {
-            // On s's side: the last ancestor of s above the height.
+        let tm = self.rec[m as usize].tin;
+        let holds_m = |r: &NodeRec<K>| r.tin <= tm && tm < r.tout;
+        let rs = &self.rec[s as usize];
+        let (c, dc) = if holds_m(rs) {
+            (s, rs.depth)
+        } else {
+            // On s's side: the last ancestor x of s above the height whose
+            // subtree does not hold m (below c); s is one. One climb finds
+            // it and c, the first ancestor that holds m (finding c first,
+            // then searching, read the same records twice).
             let mut x = s;
             loop {
                 let rx = &self.rec[x as usize];
                 let rj = &self.rec[rx.jump as usize];
-                if rj.depth > dc && above(rj.key, rj.vertex) {
+                if !holds_m(rj) && above(rj.key, rj.vertex) {
                     x = rx.jump;
                     continue;
                 }
-                let p = rx.parent;
-                let rp = &self.rec[p as usize];
-                if p != c && above(rp.key, rp.vertex) {
-                    x = p;
+                let rp = &self.rec[rx.parent as usize];
+                if holds_m(rp) {
+                    // The parent is c: past it, the path descends to m.
+                    if !above(rp.key, rp.vertex) {
+                        return rx.parent_arc;
+                    }
+                    break (rx.parent, rp.depth);
+                }
+                if above(rp.key, rp.vertex) {
+                    x = rx.parent;
                     continue;
                 }
                 return rx.parent_arc;
             }
-        }
+        };
         // On m's side: the last ancestor of m below the height.
         let mut x = m;
         loop {
