@@ -18,7 +18,10 @@
 //! 2. **Painting** (§6, [`paint`]): the join tree restricted to the critical
 //!    vertices from the maxima down, with mergeable heaps ([`heap`]), and
 //!    the split tree the same way under the inverted order
-//!    ([`count::Inverted`]); both at once on two threads.
+//!    ([`count::Inverted`]); both at once on two threads. The colours are
+//!    laid by climbs in id order, not by a search from the maxima (see
+//!    [`paint`]); heap entries hold their vertex's key, so a heap compares
+//!    without reading the field.
 //! 3. **Merge** (Carr, Snoeyink, Axen §4, on the critical vertices only):
 //!    leaf cutting is driven by the degrees alone and compares no values.
 //!    Critical vertices whose superlevel and sublevel components turn out to
@@ -41,10 +44,14 @@
 //!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
 //!    comparison is with a supernode on v's own monotone path (an ancestor
 //!    or descendant in the augmented tree). The way down at a node towards
-//!    m' is chosen by Euler-tour intervals, without comparisons. Both the
-//!    descents and the placing run on all cores over chunks of ids: a
-//!    vertex's minimum and superarc do not depend on the path that found
-//!    them, so two threads meeting on a chain store the same value.
+//!    m' is chosen by Euler-tour intervals, without comparisons. The
+//!    descents are the split tree's painting (its colour of v names m');
+//!    the placing runs on all cores over chunks of ids: a vertex's superarc
+//!    does not depend on the path that found it, so two threads meeting on
+//!    a chain store the same value. What a search step reads of a node (its
+//!    key, parent, jump pointer, depth, Euler interval) is one 32-byte
+//!    record, and one climb from the start finds both the common ancestor
+//!    with m' and the answer on that side.
 //! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
 //!    k_a regular vertices. The paper computes the unaugmented tree and has
 //!    no such term; it is the price of the augmented one.
@@ -73,11 +80,11 @@
 //!   superarcs.
 //!
 //! # Memory per vertex
-//! 4 bytes of masks, 4 of critical index, 4 of descent minimum, 4 of place
-//! (the tree's `vertex_arc`), and during painting 8 per orientation (paint
-//! and BFS queue, both orientations at once): about 32 bytes at the peak,
-//! plus O(t) for the critical vertices (colours, heap entries of 16 bytes,
-//! jump pointers).
+//! 4 bytes of masks, 4 of critical index, 4 of place (the tree's
+//! `vertex_arc`), and the paint of both orientations (4 bytes each; the
+//! split tree's is kept as the descent minimum until locating ends): about
+//! 20 bytes at the peak, plus O(t) for the critical vertices (colours, heap
+//! entries of 16 bytes, node records of 32).
 
 pub mod count;
 pub mod families;

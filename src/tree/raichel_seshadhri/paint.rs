@@ -1,13 +1,21 @@
 //! Painting (§6): the join tree restricted to a set of critical vertices,
 //! computed without sorting them.
 //!
-//! Every maximum spills its own colour down the mesh edges: one
-//! breadth-first search from all maxima at once, each vertex taking the
-//! colour of the first edge that reaches it and passing it on to all its
-//! lower edges (the paper's "descending BFS that does not explore
-//! previously colored edges"). An edge's colour is then its upper end's
-//! colour, so a colour per vertex is the whole painting, and a vertex is
-//! *touched* by the colours of its upper neighbours.
+//! Every maximum spills its own colour down the mesh edges, each vertex
+//! taking the colour of one of its upper neighbours, so that an edge's
+//! colour is its upper end's colour, a colour per vertex is the whole
+//! painting, and a vertex is *touched* by the colours of its upper
+//! neighbours. The paper paints by a descending search from the maxima
+//! (the first edge to reach a vertex gives its colour); what painting
+//! relies on is only that each vertex's colour is a maximum that reaches it
+//! by a descending path through vertices of that colour. We get that
+//! without a search: each vertex climbs to its upper neighbour nearest in
+//! id until a painted vertex, and the chain takes that colour; the climbs
+//! run in id order on all cores (a breadth-first search from all maxima at
+//! once visited the volume in wavefront order, a cache miss per vertex, and
+//! cost brainweb_t1's painting half its time). The split tree's painting
+//! (descents along the lower neighbour nearest in id) is also what
+//! locating needs of every vertex: the minimum it descends to.
 //!
 //! Each critical vertex that is not a maximum goes into the heap T(c) of
 //! one colour per component of its upper link (one per up-star). A vertex
@@ -29,8 +37,13 @@
 //! distinct colour classes that touch it, which counts the components of
 //! the superlevel set, as the join tree's definition does.
 //!
-//! Memory: 4 bytes per vertex of paint and 4 of BFS queue (both freed on
-//! return), 16 bytes per heap entry, 17 per colour.
+//! The heap entries of one colour lie together in memory (counted, then
+//! placed), and hold the key (value) of their vertex, so that a heap's
+//! comparisons read no field values ([`super::count::CountingOrder`]).
+//!
+//! Memory: 4 bytes per vertex of paint (returned: the split tree's is kept
+//! for locating), 16 bytes per heap entry for values of up to 4 bytes, 17
+//! per colour.
 
 use super::count::CountingOrder;
 use super::heap::{self, PairingHeaps};
