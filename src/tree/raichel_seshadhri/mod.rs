@@ -220,11 +220,28 @@ pub fn build<O: CountingOrder + ?Sized>(
     let t0 = Instant::now();
     let c0 = values.comparisons();
     const CHUNK: usize = 1 << 16;
+    // The 7 positive offsets of a 3D grid (directions 0, 2, .., 12).
+    const INTERIOR: u32 = (1 << 14) - 1;
+    let mut positive = [0i64; 7];
+    if half == 7 {
+        for (j, p) in positive.iter_mut().enumerate() {
+            *p = offsets[2 * j];
+        }
+    }
     let mut pos = vec![0u8; n];
     pos.par_chunks_mut(CHUNK)
         .enumerate()
         .for_each(|(c, chunk)| {
             for_each_present(grid, (c * CHUNK) as u32, chunk.len(), |i, v, present| {
+                if present == INTERIOR && half == 7 {
+                    // Inside a 3D grid: every edge, without a test each.
+                    let mut bits = 0u8;
+                    for (j, &o) in positive.iter().enumerate() {
+                        bits |= (values.above((v as i64 + o) as u32, v) as u8) << j;
+                    }
+                    chunk[i] = bits;
+                    return;
+                }
                 let mut bits = 0u8;
                 for j in 0..half {
                     if present & (1 << (2 * j)) != 0
@@ -247,16 +264,25 @@ pub fn build<O: CountingOrder + ?Sized>(
             let mut critical = Vec::new();
             for_each_present(grid, (c * CHUNK) as u32, up.len(), |i, v, present| {
                 let mut u = 0u16;
-                for j in 0..half {
-                    if pos[v as usize] & (1 << j) != 0 {
-                        u |= 1 << (2 * j);
+                if present == INTERIOR && half == 7 {
+                    let p = pos[v as usize] as u16;
+                    for (j, &o) in positive.iter().enumerate() {
+                        u |= ((p >> j) & 1) << (2 * j);
+                        let w = pos[(v as i64 - o) as usize] as u16;
+                        u |= (((w >> j) & 1) ^ 1) << (2 * j + 1);
                     }
-                    let odd = 2 * j + 1;
-                    if present & (1 << odd) != 0 {
-                        let w = step(v, &offsets, odd as u32);
-                        // w + o_j = v: v is above w unless w's bit says so.
-                        if pos[w as usize] & (1 << j) == 0 {
-                            u |= 1 << odd;
+                } else {
+                    for j in 0..half {
+                        if pos[v as usize] & (1 << j) != 0 {
+                            u |= 1 << (2 * j);
+                        }
+                        let odd = 2 * j + 1;
+                        if present & (1 << odd) != 0 {
+                            let w = step(v, &offsets, odd as u32);
+                            // w + o_j = v: v is above w unless w's bit says so.
+                            if pos[w as usize] & (1 << j) == 0 {
+                                u |= 1 << odd;
+                            }
                         }
                     }
                 }
