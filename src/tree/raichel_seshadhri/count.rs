@@ -7,15 +7,43 @@
 use crate::field::{Scalar, VertexOrder};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// A vertex order that may know how many comparisons were made on it.
+/// A vertex order that may know how many comparisons were made on it, and
+/// whose vertices may be compared by keys kept elsewhere.
 pub trait CountingOrder: VertexOrder {
+    /// What a vertex is compared by besides its id (its value): a search
+    /// or a heap that compares against the same vertices again and again
+    /// keeps their keys beside its own records instead of reading the
+    /// field at random.
+    type Key: Copy + Send + Sync;
+
+    /// The key of `v` (a read, not a comparison).
+    fn key(&self, v: u32) -> Self::Key;
+
+    /// `above(a, b)` given the keys of `a` and `b`: the same answer, and
+    /// one comparison like it. `a` and `b` only break ties, so any ids in
+    /// the same order as the vertex ids do.
+    fn above_keys(&self, ka: Self::Key, a: u32, kb: Self::Key, b: u32) -> bool;
+
     /// Comparisons made so far (0 for an order that does not count).
     fn comparisons(&self) -> u64 {
         0
     }
 }
 
-impl<T: Scalar> CountingOrder for [T] {}
+impl<T: Scalar> CountingOrder for [T] {
+    type Key = T;
+
+    #[inline(always)]
+    fn key(&self, v: u32) -> T {
+        self[v as usize]
+    }
+
+    #[inline(always)]
+    fn above_keys(&self, fa: T, a: u32, fb: T, b: u32) -> bool {
+        // The same test as `VertexOrder for [T]`.
+        fa > fb || (fa == fb && a > b)
+    }
+}
 
 /// Counts the comparisons made on an inner order (one relaxed atomic add
 /// each, so the engines' parallel stages may share it).
@@ -42,7 +70,20 @@ impl<O: VertexOrder + ?Sized> VertexOrder for Counted<'_, O> {
     }
 }
 
-impl<O: VertexOrder + ?Sized> CountingOrder for Counted<'_, O> {
+impl<O: CountingOrder + ?Sized> CountingOrder for Counted<'_, O> {
+    type Key = O::Key;
+
+    #[inline]
+    fn key(&self, v: u32) -> O::Key {
+        self.inner.key(v)
+    }
+
+    #[inline]
+    fn above_keys(&self, ka: O::Key, a: u32, kb: O::Key, b: u32) -> bool {
+        self.count.fetch_add(1, Ordering::Relaxed);
+        self.inner.above_keys(ka, a, kb, b)
+    }
+
     fn comparisons(&self) -> u64 {
         self.count.load(Ordering::Relaxed)
     }
@@ -56,6 +97,24 @@ impl<O: VertexOrder + ?Sized> VertexOrder for Inverted<'_, O> {
     #[inline(always)]
     fn above(&self, a: u32, b: u32) -> bool {
         self.0.above(b, a)
+    }
+}
+
+impl<O: CountingOrder + ?Sized> CountingOrder for Inverted<'_, O> {
+    type Key = O::Key;
+
+    #[inline(always)]
+    fn key(&self, v: u32) -> O::Key {
+        self.0.key(v)
+    }
+
+    #[inline(always)]
+    fn above_keys(&self, ka: O::Key, a: u32, kb: O::Key, b: u32) -> bool {
+        self.0.above_keys(kb, b, ka, a)
+    }
+
+    fn comparisons(&self) -> u64 {
+        self.0.comparisons()
     }
 }
 

@@ -18,7 +18,10 @@
 //! 2. **Painting** (§6, [`paint`]): the join tree restricted to the critical
 //!    vertices from the maxima down, with mergeable heaps ([`heap`]), and
 //!    the split tree the same way under the inverted order
-//!    ([`count::Inverted`]); both at once on two threads.
+//!    ([`count::Inverted`]); both at once on two threads. The colours are
+//!    laid by climbs in id order, not by a search from the maxima (see
+//!    [`paint`]); heap entries hold their vertex's key, so a heap compares
+//!    without reading the field.
 //! 3. **Merge** (Carr, Snoeyink, Axen §4, on the critical vertices only):
 //!    leaf cutting is driven by the degrees alone and compares no values.
 //!    Critical vertices whose superlevel and sublevel components turn out to
@@ -41,10 +44,14 @@
 //!    cost thousands per vertex at the foot of tooth's noisy trunk). Every
 //!    comparison is with a supernode on v's own monotone path (an ancestor
 //!    or descendant in the augmented tree). The way down at a node towards
-//!    m' is chosen by Euler-tour intervals, without comparisons. Both the
-//!    descents and the placing run on all cores over chunks of ids: a
-//!    vertex's minimum and superarc do not depend on the path that found
-//!    them, so two threads meeting on a chain store the same value.
+//!    m' is chosen by Euler-tour intervals, without comparisons. The
+//!    descents are the split tree's painting (its colour of v names m');
+//!    the placing runs on all cores over chunks of ids: a vertex's superarc
+//!    does not depend on the path that found it, so two threads meeting on
+//!    a chain store the same value. What a search step reads of a node (its
+//!    key, parent, jump pointer, depth, Euler interval) is one 32-byte
+//!    record, and one climb from the start finds both the common ancestor
+//!    with m' and the answer on that side.
 //! 6. **Sorting each arc** by value: Σ k_a log k_a comparisons over arcs of
 //!    k_a regular vertices. The paper computes the unaugmented tree and has
 //!    no such term; it is the price of the augmented one.
@@ -73,11 +80,11 @@
 //!   superarcs.
 //!
 //! # Memory per vertex
-//! 4 bytes of masks, 4 of critical index, 4 of descent minimum, 4 of place
-//! (the tree's `vertex_arc`), and during painting 8 per orientation (paint
-//! and BFS queue, both orientations at once): about 32 bytes at the peak,
-//! plus O(t) for the critical vertices (colours, heap entries of 16 bytes,
-//! jump pointers).
+//! 4 bytes of masks, 4 of critical index, 4 of place (the tree's
+//! `vertex_arc`), and the paint of both orientations (4 bytes each; the
+//! split tree's is kept as the descent minimum until locating ends): about
+//! 20 bytes at the peak, plus O(t) for the critical vertices (colours, heap
+//! entries of 16 bytes, node records of 32).
 
 pub mod count;
 pub mod families;
@@ -213,13 +220,28 @@ pub fn build<O: CountingOrder + ?Sized>(
     let t0 = Instant::now();
     let c0 = values.comparisons();
     const CHUNK: usize = 1 << 16;
+    // The 7 positive offsets of a 3D grid (directions 0, 2, .., 12).
+    const INTERIOR: u32 = (1 << 14) - 1;
+    let mut positive = [0i64; 7];
+    if half == 7 {
+        for (j, p) in positive.iter_mut().enumerate() {
+            *p = offsets[2 * j];
+        }
+    }
     let mut pos = vec![0u8; n];
     pos.par_chunks_mut(CHUNK)
         .enumerate()
         .for_each(|(c, chunk)| {
-            for (i, p) in chunk.iter_mut().enumerate() {
-                let v = (c * CHUNK + i) as u32;
-                let present = grid.present_directions(v);
+            for_each_present(grid, (c * CHUNK) as u32, chunk.len(), |i, v, present| {
+                if present == INTERIOR && half == 7 {
+                    // Inside a 3D grid: every edge, without a test each.
+                    let mut bits = 0u8;
+                    for (j, &o) in positive.iter().enumerate() {
+                        bits |= (values.above((v as i64 + o) as u32, v) as u8) << j;
+                    }
+                    chunk[i] = bits;
+                    return;
+                }
                 let mut bits = 0u8;
                 for j in 0..half {
                     if present & (1 << (2 * j)) != 0
@@ -228,46 +250,57 @@ pub fn build<O: CountingOrder + ?Sized>(
                         bits |= 1 << j;
                     }
                 }
-                *p = bits;
-            }
+                chunk[i] = bits;
+            });
         });
     let mut upper = vec![0u16; n];
     let mut lower = vec![0u16; n];
-    upper
+    // The masks, and per chunk its critical vertices (in id order).
+    let critical_chunks: Vec<Vec<u32>> = upper
         .par_chunks_mut(CHUNK)
         .zip(lower.par_chunks_mut(CHUNK))
         .enumerate()
-        .for_each(|(c, (up, low))| {
-            for i in 0..up.len() {
-                let v = (c * CHUNK + i) as u32;
-                let present = grid.present_directions(v);
+        .map(|(c, (up, low))| {
+            let mut critical = Vec::new();
+            for_each_present(grid, (c * CHUNK) as u32, up.len(), |i, v, present| {
                 let mut u = 0u16;
-                for j in 0..half {
-                    if pos[v as usize] & (1 << j) != 0 {
-                        u |= 1 << (2 * j);
+                if present == INTERIOR && half == 7 {
+                    let p = pos[v as usize] as u16;
+                    for (j, &o) in positive.iter().enumerate() {
+                        u |= ((p >> j) & 1) << (2 * j);
+                        let w = pos[(v as i64 - o) as usize] as u16;
+                        u |= (((w >> j) & 1) ^ 1) << (2 * j + 1);
                     }
-                    let odd = 2 * j + 1;
-                    if present & (1 << odd) != 0 {
-                        let w = step(v, &offsets, odd as u32);
-                        // w + o_j = v: v is above w unless w's bit says so.
-                        if pos[w as usize] & (1 << j) == 0 {
-                            u |= 1 << odd;
+                } else {
+                    for j in 0..half {
+                        if pos[v as usize] & (1 << j) != 0 {
+                            u |= 1 << (2 * j);
+                        }
+                        let odd = 2 * j + 1;
+                        if present & (1 << odd) != 0 {
+                            let w = step(v, &offsets, odd as u32);
+                            // w + o_j = v: v is above w unless w's bit says so.
+                            if pos[w as usize] & (1 << j) == 0 {
+                                u |= 1 << odd;
+                            }
                         }
                     }
                 }
+                let l = present as u16 & !u;
                 up[i] = u;
-                low[i] = present as u16 & !u;
-            }
-        });
-    drop(pos);
-    let is_critical = |v: usize| {
-        grid.link_components(upper[v] as u32, |_| {}) != 1
-            || grid.link_components(lower[v] as u32, |_| {}) != 1
-    };
-    let critical: Vec<u32> = (0..n as u32)
-        .into_par_iter()
-        .filter(|&v| is_critical(v as usize))
+                low[i] = l;
+                if grid.link_components(u as u32, |_| {}) != 1
+                    || grid.link_components(l as u32, |_| {}) != 1
+                {
+                    critical.push(v);
+                }
+            });
+            critical
+        })
         .collect();
+    drop(pos);
+    let critical: Vec<u32> = critical_chunks.concat();
+    drop(critical_chunks);
     let t = critical.len();
     let mut slot = vec![NONE; n];
     for (i, &v) in critical.iter().enumerate() {
@@ -280,6 +313,20 @@ pub fn build<O: CountingOrder + ?Sized>(
     // 2. Painting, join and split trees at once.
     progress.stage("painting");
     let t0 = Instant::now();
+    // Painting climbs, and locating climbs and descends, to the neighbour
+    // nearest in id among those the mask allows: on a plateau (equal values, ordered by id) that is the
+    // next vertex in the order, so the edge spans few supernodes.
+    let mut by_nearness: Vec<u32> = (0..offsets.len() as u32).collect();
+    by_nearness.sort_by_key(|&k| offsets[k as usize].unsigned_abs());
+    let nearest: Vec<u8> = (0..1u32 << offsets.len())
+        .map(|mask| {
+            by_nearness
+                .iter()
+                .find(|&&k| mask & (1 << k) != 0)
+                .map_or(0, |&k| k as u8)
+        })
+        .collect();
+
     let c0 = values.comparisons();
     let join_side = Orientation {
         grid,
@@ -288,6 +335,7 @@ pub fn build<O: CountingOrder + ?Sized>(
         lower: &lower,
         critical: &critical,
         slot: &slot,
+        nearest: &nearest,
     };
     let split_side = Orientation {
         upper: &lower,
@@ -306,7 +354,12 @@ pub fn build<O: CountingOrder + ?Sized>(
                 .map(|s| (s, t.elapsed()))
         },
     );
-    let ((join, tj), (split, ts)) = (join?, split?);
+    let ((mut join, tj), (mut split, ts)) = (join?, split?);
+    drop(std::mem::take(&mut join.paint));
+    // The split tree's painting descends from every vertex to a minimum
+    // along the lower neighbour nearest in id: what locating needs.
+    let min_colour = std::mem::take(&mut split.paint);
+    let minima = std::mem::take(&mut split.maxima);
     progress.check(0, 1)?;
     stats.times.join = tj;
     stats.times.split = ts;
@@ -392,26 +445,15 @@ pub fn build<O: CountingOrder + ?Sized>(
             });
         }
     }
-    drop((adj, adj_off, node_crit, node_of));
+    // The node of each minimum, by its colour in the split painting.
+    let min_node: Vec<u32> = minima.iter().map(|&i| node_of[i as usize]).collect();
+    drop((adj, adj_off, node_crit, node_of, minima));
     stats.times.merge += t0.elapsed();
 
     // 5. Locate the regular vertices.
     progress.stage("augment");
     let t0 = Instant::now();
     let c0 = values.comparisons();
-    // Climb and descend to the neighbour nearest in id among those the
-    // mask allows: on a plateau (equal values, ordered by id) that is the
-    // next vertex in the order, so the edge spans few supernodes.
-    let mut by_nearness: Vec<u32> = (0..offsets.len() as u32).collect();
-    by_nearness.sort_by_key(|&k| offsets[k as usize].unsigned_abs());
-    let nearest: Vec<u8> = (0..1u32 << offsets.len())
-        .map(|mask| {
-            by_nearness
-                .iter()
-                .find(|&&k| mask & (1 << k) != 0)
-                .map_or(0, |&k| k as u8)
-        })
-        .collect();
     // link_step[k][j]: the direction from v + d_k to v + d_j when the two
     // are joined in v's link (d_j - d_k is a direction), else NO_STEP.
     const NO_STEP: u8 = u8::MAX;
@@ -452,7 +494,7 @@ pub fn build<O: CountingOrder + ?Sized>(
             return u;
         }
     };
-    let walk = SuperarcWalk::new(&nodes, &arcs);
+    let walk = SuperarcWalk::new(&nodes, &arcs, |v| values.key(v));
     // Both passes below run on all cores over chunks of ids. A vertex's
     // descent minimum and its superarc are facts of the field, not of the
     // path that reached them, so two threads that meet on one chain store
@@ -462,34 +504,10 @@ pub fn build<O: CountingOrder + ?Sized>(
     use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
     const LOCATE_CHUNK: usize = 1 << 14;
     let chunks = n.div_ceil(LOCATE_CHUNK);
-    // The minimum each vertex descends to, as a node id.
-    let min_of: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(NONE)).collect();
+    // The minimum each vertex descends to, as a node id: the split
+    // tree's painting (its colour of v) gives it.
+    let min_of = |v: u32| min_node[min_colour[v as usize] as usize];
     let place_a: Vec<AtomicU32> = place.into_iter().map(AtomicU32::new).collect();
-    (0..chunks)
-        .into_par_iter()
-        .for_each_init(Vec::new, |chain, c| {
-            let end = ((c + 1) * LOCATE_CHUNK).min(n);
-            for v in (c * LOCATE_CHUNK) as u32..end as u32 {
-                if min_of[v as usize].load(Relaxed) != NONE {
-                    continue;
-                }
-                let mut x = v;
-                let mut m = min_of[x as usize].load(Relaxed);
-                while m == NONE && lower[x as usize] != 0 {
-                    chain.push(x);
-                    x = step(x, &offsets, nearest[lower[x as usize] as usize] as u32);
-                    m = min_of[x as usize].load(Relaxed);
-                }
-                if m == NONE {
-                    m = place_a[x as usize].load(Relaxed) & !NODE_FLAG;
-                    min_of[x as usize].store(m, Relaxed);
-                }
-                for &y in chain.iter() {
-                    min_of[y as usize].store(m, Relaxed);
-                }
-                chain.clear();
-            }
-        });
     (0..chunks)
         .into_par_iter()
         .try_for_each_init(Vec::new, |chain, c| {
@@ -507,7 +525,7 @@ pub fn build<O: CountingOrder + ?Sized>(
                     from = place_a[x as usize].load(Relaxed);
                 }
                 while let Some(y) = chain.pop() {
-                    let m = min_of[y as usize].load(Relaxed);
+                    let m = min_of(y);
                     let mut arc = if from & NODE_FLAG != 0 {
                         walk.down_towards(from & !NODE_FLAG, m)
                     } else {
@@ -516,11 +534,13 @@ pub fn build<O: CountingOrder + ?Sized>(
                     // Most vertices lie on the first arc; past it, a search
                     // by jump pointers along the rest of the path (see
                     // SuperarcWalk).
+                    // (Keys kept in the walk's records: no field reads but
+                    // y's own.)
+                    let ky = values.key(y);
                     let lower_end = arcs[arc as usize].lower.0;
-                    if !values.above(y, nodes[lower_end as usize].vertex) {
-                        arc = walk.locate(lower_end, m, |node| {
-                            values.above(nodes[node as usize].vertex, y)
-                        });
+                    let rl = &walk.rec[lower_end as usize];
+                    if values.above_keys(rl.key, rl.vertex, ky, y) {
+                        arc = walk.locate(lower_end, m, |k, x| values.above_keys(k, x, ky, y));
                     }
                     place_a[y as usize].store(arc, Relaxed);
                     from = arc;
@@ -528,7 +548,7 @@ pub fn build<O: CountingOrder + ?Sized>(
             }
             Ok::<(), Cancelled>(())
         })?;
-    drop(min_of);
+    drop((min_colour, min_node));
     let place: Vec<u32> = place_a.into_iter().map(AtomicU32::into_inner).collect();
     stats.times.locate = t0.elapsed();
     stats.comparisons.locate = values.comparisons() - c0;
@@ -576,6 +596,42 @@ pub fn build<O: CountingOrder + ?Sized>(
     Ok((tree, stats))
 }
 
+/// Calls `f(i, v, present)` for the vertices v = first + i, i < len, with
+/// the mask of the directions present at v, computed from coordinates kept
+/// up to date (not divided out per vertex) and all directions inside.
+#[inline(always)]
+fn for_each_present(
+    grid: &FreudenthalGrid,
+    first: u32,
+    len: usize,
+    mut f: impl FnMut(usize, u32, u32),
+) {
+    let [dx, dy, dz] = grid.dims().map(|d| d as u32);
+    let inside = |c: u32, d: u32| d == 1 || (c > 0 && c + 1 < d);
+    let all = (1u32 << grid.directions().len()) - 1;
+    let [mut x, mut y, mut z] = grid.coords(first);
+    let mut row_inside = inside(y, dy) && inside(z, dz);
+    for i in 0..len {
+        let v = first + i as u32;
+        let present = if row_inside && inside(x, dx) {
+            all
+        } else {
+            grid.present_directions(v)
+        };
+        f(i, v, present);
+        x += 1;
+        if x == dx {
+            x = 0;
+            y += 1;
+            if y == dy {
+                y = 0;
+                z += 1;
+            }
+            row_inside = inside(y, dy) && inside(z, dz);
+        }
+    }
+}
+
 /// Marks `next[x]` when x lies above its neighbour.
 const ABOVE: u32 = 1 << 31;
 
@@ -588,10 +644,12 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
     let CriticalTree {
         parent: mut jp,
         children: mut jc,
+        ..
     } = join;
     let CriticalTree {
         parent: mut sp,
         children: mut sc,
+        ..
     } = split;
     let t = jp.len();
     let mut next = vec![NONE; t];
@@ -643,27 +701,37 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
 /// The superarc tree rooted at the global minimum, with Euler-tour
 /// intervals, to choose at a node the down arc that leads towards a given
 /// minimum without comparing values.
-struct SuperarcWalk {
+struct SuperarcWalk<K> {
     /// Per node, its down arcs.
     down_off: Vec<u32>,
     down: Vec<u32>,
     /// Per arc, its lower node.
     lower: Vec<u32>,
-    /// Parent node in the rooted tree.
-    parent: Vec<u32>,
-    /// The arc to the parent.
-    parent_arc: Vec<u32>,
-    /// Depth in the rooted tree and Myers' jump pointer (an ancestor whose
-    /// depth depends on the node's depth only, so that any monotone search
-    /// along the ancestors takes O(log depth) steps).
-    depth: Vec<u32>,
-    jump: Vec<u32>,
-    tin: Vec<u32>,
-    tout: Vec<u32>,
+    /// Per node, what a search step reads, in one record (separate arrays
+    /// made every step of a search four or five cache misses).
+    rec: Vec<NodeRec<K>>,
 }
 
-impl SuperarcWalk {
-    fn new(nodes: &[Node], arcs: &[Superarc]) -> Self {
+/// One node of [`SuperarcWalk`]: its vertex and the vertex's key (what a
+/// search compares, read here and not from the field), parent in the rooted tree and
+/// the arc to it, depth and Myers' jump pointer (an ancestor whose depth
+/// depends on the node's depth only, so that any monotone search along the
+/// ancestors takes O(log depth) steps), and its Euler-tour interval.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct NodeRec<K> {
+    key: K,
+    vertex: u32,
+    parent: u32,
+    jump: u32,
+    depth: u32,
+    parent_arc: u32,
+    tin: u32,
+    tout: u32,
+}
+
+impl<K: Copy> SuperarcWalk<K> {
+    fn new(nodes: &[Node], arcs: &[Superarc], key: impl Fn(u32) -> K) -> Self {
         let k = nodes.len();
         let mut down_off = vec![0u32; k + 1];
         let mut deg = vec![0u32; k + 1];
@@ -677,71 +745,70 @@ impl SuperarcWalk {
         }
         let mut fill = down_off.clone();
         let mut down = vec![0u32; arcs.len()];
-        // Undirected adjacency for the rooting.
+        // Undirected adjacency for the rooting, with the arc of each entry.
         let mut adj_off = vec![0u32; k + 1];
         for i in 0..k {
             adj_off[i + 1] = adj_off[i] + deg[i];
         }
         let mut adj_fill = adj_off.clone();
-        let mut adj = vec![0u32; 2 * arcs.len()];
+        let mut adj = vec![(0u32, 0u32); 2 * arcs.len()];
         for (i, a) in arcs.iter().enumerate() {
             let (u, l) = (a.upper.0 as usize, a.lower.0 as usize);
             down[fill[u] as usize] = i as u32;
             fill[u] += 1;
-            adj[adj_fill[u] as usize] = l as u32;
+            adj[adj_fill[u] as usize] = (l as u32, i as u32);
             adj_fill[u] += 1;
-            adj[adj_fill[l] as usize] = u as u32;
+            adj[adj_fill[l] as usize] = (u as u32, i as u32);
             adj_fill[l] += 1;
         }
         let lower = arcs.iter().map(|a| a.lower.0).collect();
         // Nodes are in vertex order: node 0 is the global minimum.
-        let mut parent = vec![NONE; k];
-        let mut parent_arc = vec![NONE; k];
-        let mut depth = vec![0u32; k];
-        let mut jump = vec![0u32; k];
-        let mut tin = vec![0u32; k];
-        let mut tout = vec![0u32; k];
-        // Arc ids alongside the undirected adjacency.
-        let mut adj_arc = vec![0u32; 2 * arcs.len()];
-        {
-            let mut f = adj_off.clone();
-            for (i, a) in arcs.iter().enumerate() {
-                let (u, l) = (a.upper.0 as usize, a.lower.0 as usize);
-                adj_arc[f[u] as usize] = i as u32;
-                f[u] += 1;
-                adj_arc[f[l] as usize] = i as u32;
-                f[l] += 1;
-            }
-        }
+        let mut rec: Vec<NodeRec<K>> = nodes
+            .iter()
+            .map(|n| NodeRec {
+                key: key(n.vertex),
+                vertex: n.vertex,
+                parent: NONE,
+                jump: 0,
+                depth: 0,
+                parent_arc: NONE,
+                tin: 0,
+                tout: 0,
+            })
+            .collect();
         if k > 0 {
             let mut clock = 0u32;
             let mut stack: Vec<(u32, u32)> = vec![(0, adj_off[0])];
-            tin[0] = clock;
+            rec[0].tin = clock;
             clock += 1;
             while let Some(top) = stack.len().checked_sub(1) {
                 let (v, e) = stack[top];
                 if e < adj_off[v as usize + 1] {
-                    let w = adj[e as usize];
+                    let (w, arc) = adj[e as usize];
                     stack[top].1 += 1;
-                    if w != parent[v as usize] {
-                        parent[w as usize] = v;
-                        parent_arc[w as usize] = adj_arc[e as usize];
-                        depth[w as usize] = depth[v as usize] + 1;
-                        let j = jump[v as usize];
-                        let jj = jump[j as usize];
-                        jump[w as usize] = if depth[v as usize] - depth[j as usize]
-                            == depth[j as usize] - depth[jj as usize]
-                        {
-                            jj
+                    if w != rec[v as usize].parent {
+                        let rv = rec[v as usize];
+                        let j = rv.jump;
+                        let (dj, djj) = (
+                            rec[j as usize].depth,
+                            rec[rec[j as usize].jump as usize].depth,
+                        );
+                        let jump = if rv.depth - dj == dj - djj {
+                            rec[j as usize].jump
                         } else {
                             v
                         };
-                        tin[w as usize] = clock;
+                        let rw = &mut rec[w as usize];
+                        rw.parent = v;
+                        rw.parent_arc = arc;
+                        rw.depth = rv.depth + 1;
+                        rw.jump = jump;
+                        rw.tin = clock;
                         clock += 1;
                         stack.push((w, adj_off[w as usize]));
                     }
                 } else {
-                    tout[v as usize] = clock;
+                    rec[v as usize].tout = clock;
                     stack.pop();
                 }
             }
@@ -750,96 +817,76 @@ impl SuperarcWalk {
             down_off,
             down,
             lower,
-            parent,
-            parent_arc,
-            depth,
-            jump,
-            tin,
-            tout,
+            rec,
         }
-    }
-
-    /// Lowest common ancestor, by jump pointers (no comparisons).
-    fn lca(&self, mut a: u32, mut b: u32) -> u32 {
-        let d = |x: u32| self.depth[x as usize];
-        if d(a) < d(b) {
-            std::mem::swap(&mut a, &mut b);
-        }
-        while d(a) > d(b) {
-            let j = self.jump[a as usize];
-            a = if d(j) >= d(b) {
-                j
-            } else {
-                self.parent[a as usize]
-            };
-        }
-        // Equal depths have equal jump depths: lift both together.
-        while a != b {
-            let (ja, jb) = (self.jump[a as usize], self.jump[b as usize]);
-            if ja != jb {
-                a = ja;
-                b = jb;
-            } else {
-                a = self.parent[a as usize];
-                b = self.parent[b as usize];
-            }
-        }
-        a
     }
 
     /// The arc at a height on the monotone path from node `s` down to the
-    /// minimum `m`: `above(x)` says whether node x is above that height
-    /// (true at `s`, false at `m`). The path climbs from `s` to the common
-    /// ancestor c and descends to `m`; along each part `above` changes once,
-    /// and jump pointers find the change in O(log depth) comparisons. (A
-    /// walk of a few nodes from each part's start before the jumps was
-    /// tried: on tooth the change is rarely near, and it raised locating
-    /// from 12.6 to 14.2 comparisons per vertex.)
-    fn locate(&self, s: u32, m: u32, mut above: impl FnMut(u32) -> bool) -> u32 {
-        let c = if self.in_subtree(m, s) {
-            s
+    /// minimum `m`: `above(k, x)` says whether the vertex x (of key k) of a
+    /// node is above that height (true at `s`, false at `m`). The path climbs from `s` to
+    /// the common ancestor c and descends to `m`; along each part `above`
+    /// changes once, and jump pointers find the change in O(log depth)
+    /// comparisons; whether the subtree of a node holds `m` (Euler-tour
+    /// intervals, no comparison) tells the two parts apart. (A walk of a few nodes from each part's start before
+    /// the jumps was tried: on tooth the change is rarely near, and it
+    /// raised locating from 12.6 to 14.2 comparisons per vertex.)
+    fn locate(&self, s: u32, m: u32, mut above: impl FnMut(K, u32) -> bool) -> u32 {
+        let tm = self.rec[m as usize].tin;
+        let holds_m = |r: &NodeRec<K>| r.tin <= tm && tm < r.tout;
+        let rs = &self.rec[s as usize];
+        let (c, dc) = if holds_m(rs) {
+            (s, rs.depth)
         } else {
-            self.lca(s, m)
-        };
-        let dc = self.depth[c as usize];
-        if c != s && !above(c) {
-            // On s's side: the last ancestor of s above the height.
+            // On s's side: the last ancestor x of s above the height whose
+            // subtree does not hold m (below c); s is one. One climb finds
+            // it and c, the first ancestor that holds m (finding c first,
+            // then searching, read the same records twice).
             let mut x = s;
             loop {
-                let j = self.jump[x as usize];
-                if self.depth[j as usize] > dc && above(j) {
-                    x = j;
+                let rx = &self.rec[x as usize];
+                let rj = &self.rec[rx.jump as usize];
+                if !holds_m(rj) && above(rj.key, rj.vertex) {
+                    x = rx.jump;
                     continue;
                 }
-                let p = self.parent[x as usize];
-                if p != c && above(p) {
-                    x = p;
+                let rp = &self.rec[rx.parent as usize];
+                if holds_m(rp) {
+                    // The parent is c: past it, the path descends to m.
+                    if !above(rp.key, rp.vertex) {
+                        return rx.parent_arc;
+                    }
+                    break (rx.parent, rp.depth);
+                }
+                if above(rp.key, rp.vertex) {
+                    x = rx.parent;
                     continue;
                 }
-                return self.parent_arc[x as usize];
+                return rx.parent_arc;
             }
-        }
+        };
         // On m's side: the last ancestor of m below the height.
         let mut x = m;
         loop {
-            let j = self.jump[x as usize];
-            if self.depth[j as usize] > dc && !above(j) {
-                x = j;
+            let rx = &self.rec[x as usize];
+            let rj = &self.rec[rx.jump as usize];
+            if rj.depth > dc && !above(rj.key, rj.vertex) {
+                x = rx.jump;
                 continue;
             }
-            let p = self.parent[x as usize];
-            if p != c && !above(p) {
+            let p = rx.parent;
+            let rp = &self.rec[p as usize];
+            if p != c && !above(rp.key, rp.vertex) {
                 x = p;
                 continue;
             }
-            return self.parent_arc[x as usize];
+            return rx.parent_arc;
         }
     }
 
     #[inline]
     fn in_subtree(&self, x: u32, root: u32) -> bool {
-        let (x, r) = (x as usize, root as usize);
-        self.tin[r] <= self.tin[x] && self.tin[x] < self.tout[r]
+        let (tx, r) = (self.rec[x as usize].tin, &self.rec[root as usize]);
+        r.tin <= tx && tx < r.tout
     }
 
     /// The down arc of node `p` on the tree path from `p` to node `m`
@@ -848,9 +895,10 @@ impl SuperarcWalk {
     fn down_towards(&self, p: u32, m: u32) -> u32 {
         let arcs =
             &self.down[self.down_off[p as usize] as usize..self.down_off[p as usize + 1] as usize];
+        let parent = self.rec[p as usize].parent;
         for &a in arcs {
             let q = self.lower[a as usize];
-            let toward = if q == self.parent[p as usize] {
+            let toward = if q == parent {
                 !self.in_subtree(m, p)
             } else {
                 self.in_subtree(m, q)

@@ -1,13 +1,21 @@
 //! Painting (§6): the join tree restricted to a set of critical vertices,
 //! computed without sorting them.
 //!
-//! Every maximum spills its own colour down the mesh edges: one
-//! breadth-first search from all maxima at once, each vertex taking the
-//! colour of the first edge that reaches it and passing it on to all its
-//! lower edges (the paper's "descending BFS that does not explore
-//! previously colored edges"). An edge's colour is then its upper end's
-//! colour, so a colour per vertex is the whole painting, and a vertex is
-//! *touched* by the colours of its upper neighbours.
+//! Every maximum spills its own colour down the mesh edges, each vertex
+//! taking the colour of one of its upper neighbours, so that an edge's
+//! colour is its upper end's colour, a colour per vertex is the whole
+//! painting, and a vertex is *touched* by the colours of its upper
+//! neighbours. The paper paints by a descending search from the maxima
+//! (the first edge to reach a vertex gives its colour); what painting
+//! relies on is only that each vertex's colour is a maximum that reaches it
+//! by a descending path through vertices of that colour. We get that
+//! without a search: each vertex climbs to its upper neighbour nearest in
+//! id until a painted vertex, and the chain takes that colour; the climbs
+//! run in id order on all cores (a breadth-first search from all maxima at
+//! once visited the volume in wavefront order, a cache miss per vertex, and
+//! cost brainweb_t1's painting half its time). The split tree's painting
+//! (descents along the lower neighbour nearest in id) is also what
+//! locating needs of every vertex: the minimum it descends to.
 //!
 //! Each critical vertex that is not a maximum goes into the heap T(c) of
 //! one colour per component of its upper link (one per up-star). A vertex
@@ -29,13 +37,20 @@
 //! distinct colour classes that touch it, which counts the components of
 //! the superlevel set, as the join tree's definition does.
 //!
-//! Memory: 4 bytes per vertex of paint and 4 of BFS queue (both freed on
-//! return), 16 bytes per heap entry, 17 per colour.
+//! The heap entries of one colour lie together in memory (counted, then
+//! placed), and hold the key (value) of their vertex, so that a heap's
+//! comparisons read no field values ([`super::count::CountingOrder`]).
+//!
+//! Memory: 4 bytes per vertex of paint (returned: the split tree's is kept
+//! for locating), 16 bytes per heap entry for values of up to 4 bytes, 17
+//! per colour.
 
+use super::count::CountingOrder;
 use super::heap::{self, PairingHeaps};
-use crate::field::VertexOrder;
 use crate::mesh::FreudenthalGrid;
 use crate::progress::{Cancelled, Progress};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// No vertex / no critical vertex.
 pub const NONE: u32 = u32::MAX;
@@ -49,6 +64,10 @@ pub struct CriticalTree {
     /// Number of children: components of the superlevel set that touch the
     /// vertex (0 at maxima).
     pub children: Vec<u32>,
+    /// The painting: per vertex, its colour (an index into `maxima`).
+    pub paint: Vec<u32>,
+    /// Per colour, the critical index of its maximum.
+    pub maxima: Vec<u32>,
 }
 
 /// What painting sees of the mesh, in one orientation.
@@ -65,6 +84,9 @@ pub struct Orientation<'a> {
     pub critical: &'a [u32],
     /// Per vertex: its critical index, or `NONE`.
     pub slot: &'a [u32],
+    /// Per bit mask of directions, the direction of the neighbour nearest
+    /// in id among those the mask holds (0 for the empty mask).
+    pub nearest: &'a [u8],
 }
 
 #[inline(always)]
@@ -86,7 +108,7 @@ fn find(uf: &mut [u32], mut c: u32) -> u32 {
 /// Paints the mesh and builds the critical join tree in the orientation
 /// `order` (the field's own order for the join tree, [`super::count::Inverted`]
 /// for the split tree).
-pub fn critical_join_tree<O: VertexOrder + ?Sized>(
+pub fn critical_join_tree<O: CountingOrder + ?Sized>(
     m: &Orientation<'_>,
     order: &O,
     progress: &Progress,
@@ -95,41 +117,58 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
     let t = m.critical.len();
     const CHECK_EVERY: usize = 1 << 20;
 
-    // init 1: the initial painting, one colour per maximum.
-    let mut paint = vec![NONE; n];
-    let mut queue: Vec<u32> = Vec::with_capacity(n);
+    // init 1: the initial painting, one colour per maximum. Every other
+    // vertex takes the colour of one upper neighbour (the nearest in id):
+    // following those choices climbs strictly to a maximum, so each colour
+    // is a maximum reachable from the vertex by a descending path and its
+    // vertices are connected through the edges chosen, which is all that
+    // the paper's descending search guarantees and all that painting uses.
+    // (A breadth-first search from all maxima at once did the same but
+    // visited the volume in wavefront order, a cache miss per vertex; the
+    // climb runs in id order on all cores, each chain stored once.)
     let mut att: Vec<u32> = Vec::new();
+    let paint_a: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(NONE)).collect();
     for (i, &v) in m.critical.iter().enumerate() {
         if m.upper[v as usize] == 0 {
-            paint[v as usize] = att.len() as u32;
+            paint_a[v as usize].store(att.len() as u32, Relaxed);
             att.push(i as u32);
-            queue.push(v);
         }
     }
-    let colours = att.len();
-    let mut head = 0;
-    while head < queue.len() {
-        if head % CHECK_EVERY == 0 {
-            progress.check(head, 2 * n)?;
-        }
-        let u = queue[head];
-        head += 1;
-        let c = paint[u as usize];
-        let mut low = m.lower[u as usize] as u32;
-        while low != 0 {
-            let w = step(u, m.offsets, low.trailing_zeros());
-            low &= low - 1;
-            if paint[w as usize] == NONE {
-                paint[w as usize] = c;
-                queue.push(w);
+    let maxima = att.clone();
+    const PAINT_CHUNK: usize = 1 << 14;
+    (0..n.div_ceil(PAINT_CHUNK))
+        .into_par_iter()
+        .try_for_each_init(Vec::new, |chain: &mut Vec<u32>, c| {
+            if (c * PAINT_CHUNK).is_multiple_of(CHECK_EVERY) {
+                progress.check(c * PAINT_CHUNK, 2 * n)?;
             }
-        }
-    }
-    drop(queue);
+            let end = ((c + 1) * PAINT_CHUNK).min(n);
+            for v in (c * PAINT_CHUNK) as u32..end as u32 {
+                if paint_a[v as usize].load(Relaxed) != NONE {
+                    continue;
+                }
+                // Unpainted vertices are not maxima: each climbs.
+                let mut x = v;
+                let col = loop {
+                    let p = paint_a[x as usize].load(Relaxed);
+                    if p != NONE {
+                        break p;
+                    }
+                    chain.push(x);
+                    x = step(x, m.offsets, m.nearest[m.upper[x as usize] as usize] as u32);
+                };
+                for &y in chain.iter() {
+                    paint_a[y as usize].store(col, Relaxed);
+                }
+                chain.clear();
+            }
+            Ok::<(), Cancelled>(())
+        })?;
+    let paint: Vec<u32> = paint_a.into_iter().map(AtomicU32::into_inner).collect();
+    let colours = att.len();
 
     // init 4-5: every non-maximal critical vertex into the heap of one
     // colour of each up-star; rep(c) = c, att(c) = its maximum.
-    let mut heaps = PairingHeaps::with_capacity(t + t / 2);
     // Per colour class: its heap's root entry and the item on top (`NONE`
     // when empty), side by side, so that asking a class for its highest
     // vertex, which `update` does for every colour of every vertex it
@@ -156,6 +195,25 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         }
         col_off[i + 1] = cols.len() as u32;
     }
+    // The entries of each colour's heap lie together in the arena, in
+    // critical order (counted first, then placed), and are melded in that
+    // order: the same heaps and comparisons as melding them as they come,
+    // but a heap's first pops, which pair all its entries, read one run of
+    // memory instead of entries strewn over the whole arena.
+    let mut start = vec![0u32; colours + 1];
+    for &v in m.critical {
+        let up = m.upper[v as usize] as u32;
+        m.grid.link_components(up, |k| {
+            let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
+            start[c + 1] += 1;
+        });
+    }
+    for c in 0..colours {
+        start[c + 1] += start[c];
+    }
+    let blank = order.key(m.critical.first().copied().unwrap_or(0));
+    let mut heaps = PairingHeaps::with_len(start[colours] as usize, blank);
+    let mut fill = start.clone();
     for (i, &v) in m.critical.iter().enumerate() {
         let up = m.upper[v as usize] as u32;
         if up == 0 {
@@ -165,11 +223,19 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         remaining += 1;
         m.grid.link_components(up, |k| {
             let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
-            let e = heaps.singleton(v, i as u32);
-            let r = heaps.meld(root[c][0], e, order);
-            root[c] = [r, heaps.top(r).unwrap_or(NONE)];
+            heaps.set(fill[c], order.key(v), i as u32);
+            fill[c] += 1;
         });
     }
+    drop(fill);
+    for c in 0..colours {
+        let mut r = heap::NONE;
+        for e in start[c]..start[c + 1] {
+            r = heaps.meld(r, e, order);
+        }
+        root[c] = [r, heaps.top(r).unwrap_or(NONE)];
+    }
+    drop(start);
 
     let mut parent = vec![NONE; t];
     let mut children = vec![0u32; t];
@@ -256,5 +322,10 @@ pub fn critical_join_tree<O: VertexOrder + ?Sized>(
         processed[hs as usize] = true;
         remaining -= 1;
     }
-    Ok(CriticalTree { parent, children })
+    Ok(CriticalTree {
+        parent,
+        children,
+        paint,
+        maxima,
+    })
 }
