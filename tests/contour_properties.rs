@@ -464,17 +464,22 @@ fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
         v
     };
     let (pa, pb) = (by_position(fast), by_position(oracle));
-    let mut far = 0;
+    let mut far = Vec::new();
     for ((p, n), (q, m)) in pa.iter().zip(&pb) {
         assert_eq!(p, q, "{at}: the same vertex positions");
         let d = (0..3).map(|k| (n[k] - m[k]).abs()).fold(0f32, f32::max);
-        far += usize::from(d > 1e-3);
+        if d > 1e-3 {
+            far.push((*n, *m));
+        }
     }
-    // Vertices at one position (an edge end reached by several edges)
-    // may pair their normals differently after sorting; nowhere else.
+    // A vertex whose downhill gradient is (nearly) perpendicular to its
+    // area-weighted normal takes the one or the other depending on the
+    // order the face normals were summed in (on integer grids the dot
+    // product can be exactly zero); such vertices are rare.
     assert!(
-        far * 1000 <= pa.len().max(1000),
-        "{at}: {far} of {} normals differ",
+        far.len() <= 2 + pa.len() / 500,
+        "{at}: {} of {} normals differ: {far:?}",
+        far.len(),
         pa.len()
     );
 }
