@@ -53,8 +53,8 @@
 //! load 3-4): on the colin27_ch2 head (5.4-5.7 M triangles, steps of +1
 //! from h = 64 along its chain at the 100-arc level) a step flips 33-38 k
 //! vertices, re-evaluates 745-790 k tetrahedra and joins or drops 10-30 k
-//! tetrahedra of other pieces, yet costs 700-911 ms (median) against
-//! 492-619 ms for extracting the head afresh on both cores in the same
+//! tetrahedra of other pieces, yet costs 700-911 ms (median; 571 ms on a
+//! quiet machine) against 492-619 ms (quiet: 422 ms) for extracting the head afresh on both cores in the same
 //! run. The change itself takes 200-300 ms (the records, pairs and
 //! vertices it touches lie scattered in memory: about 300 ns per
 //! tetrahedron), and the output passes 400 ms more: every vertex moves, so
