@@ -324,17 +324,7 @@ fn scripted_drag(
     // nodes the contour stays the head's.
     let dir = 1.0;
     let start = arc;
-    let sim = std::sync::Arc::new(flexiso::simplify::Simplification::new(
-        tree,
-        field,
-        flexiso::simplify::Measure::Volume,
-    ));
-    let mut level = flexiso::simplify::SimplifiedTree::new(sim);
-    level.set_level(100);
-    let chain: Vec<flexiso::tree::ArcId> = match level.live_arc_of(arc) {
-        Some(a) => level.arc(a).chain.to_vec(),
-        None => vec![arc],
-    };
+    let chain = chain_at_100_arcs(tree, field, arc);
     let gpu = flexiso::render::headless::Gpu::new().ok();
     let mut renderer = gpu.as_ref().map(|g| g.renderer());
     let budget = flexiso::app::panels::view3d::UPLOAD_BUDGET;
@@ -400,6 +390,26 @@ fn scripted_drag(
         sizes.1,
         budget >> 20,
     );
+}
+
+/// The chain of superarcs that `arc` belongs to at the simplification
+/// level of 100 arcs (by volume), as the explorer's marker moves along it.
+fn chain_at_100_arcs(
+    tree: &ContourTree,
+    field: &ScalarField,
+    arc: flexiso::tree::ArcId,
+) -> Vec<flexiso::tree::ArcId> {
+    let sim = std::sync::Arc::new(flexiso::simplify::Simplification::new(
+        tree,
+        field,
+        flexiso::simplify::Measure::Volume,
+    ));
+    let mut level = flexiso::simplify::SimplifiedTree::new(sim);
+    level.set_level(100);
+    match level.live_arc_of(arc) {
+        Some(a) => level.arc(a).chain.to_vec(),
+        None => vec![arc],
+    }
 }
 
 /// Median and largest of `v` (NaN when empty).
@@ -591,17 +601,7 @@ fn drag_latency(
     }
     // Steps of one value unit down the arc's chain (100-arc level, by
     // volume), as a mouse drag makes them.
-    let sim = std::sync::Arc::new(flexiso::simplify::Simplification::new(
-        tree,
-        field,
-        flexiso::simplify::Measure::Volume,
-    ));
-    let mut level = flexiso::simplify::SimplifiedTree::new(sim);
-    level.set_level(100);
-    let chain = match level.live_arc_of(arc) {
-        Some(a) => level.arc(a).chain.to_vec(),
-        None => vec![arc],
-    };
+    let chain = chain_at_100_arcs(tree, field, arc);
     let ends = (
         field.value(tree.node(tree.arc(chain[0]).lower).vertex),
         field.value(tree.node(tree.arc(chain[chain.len() - 1]).upper).vertex),

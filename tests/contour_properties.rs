@@ -592,6 +592,20 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
     }
 }
 
+/// The `pick`-th (cyclically) of the arcs spanning `iso`, if any.
+fn spanning_arc(
+    tree: &ContourTree,
+    field: &ScalarField,
+    iso: Isovalue,
+    pick: usize,
+) -> Option<ArcId> {
+    let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)
+        .map(ArcId)
+        .filter(|&a| path_seed(tree, field, a, iso).is_some())
+        .collect();
+    (!spanning.is_empty()).then(|| spanning[pick % spanning.len()])
+}
+
 /// Drags one contour through `cuts` from `arc` at `from`: at each cut the
 /// step to every spanning arc reached through the slab gives what the
 /// follower gives for that arc there; arcs not reached are refused and
@@ -669,12 +683,9 @@ proptest! {
     ) {
         let tree = tree_of(&field);
         let from = Isovalue::new(start as f64 / 2.0);
-        let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)
-            .map(ArcId)
-            .filter(|&a| path_seed(&tree, &field, a, from).is_some())
-            .collect();
-        prop_assume!(!spanning.is_empty());
-        let arc = spanning[pick % spanning.len()];
+        let arc = spanning_arc(&tree, &field, from, pick);
+        prop_assume!(arc.is_some());
+        let arc = arc.expect("assumed");
         let cuts: Vec<Isovalue> = cuts.iter().map(|&c| Isovalue::new(c as f64 / 2.0)).collect();
         drag_matches_the_follower(&field, &tree, arc, from, &cuts);
     }
@@ -690,12 +701,9 @@ proptest! {
         let field = noisy_field(dims, seed);
         let tree = tree_of(&field);
         let from = Isovalue::new(start);
-        let spanning: Vec<ArcId> = (0..tree.arcs().len() as u32)
-            .map(ArcId)
-            .filter(|&a| path_seed(&tree, &field, a, from).is_some())
-            .collect();
-        prop_assume!(!spanning.is_empty());
-        let arc = spanning[pick % spanning.len()];
+        let arc = spanning_arc(&tree, &field, from, pick);
+        prop_assume!(arc.is_some());
+        let arc = arc.expect("assumed");
         // Small steps (what a drag makes) as well as far ones.
         let cuts: Vec<Isovalue> = cuts
             .iter()

@@ -164,12 +164,23 @@ mod tests {
         for r in roots {
             all = heaps.meld(all, r, order);
         }
+        assert_pops_in_order(&mut heaps, all, order, 200);
+    }
+
+    /// Pops heap `all` empty: vertices `0..n` in the order's descending
+    /// order, ties by id.
+    fn assert_pops_in_order<O: CountingOrder + ?Sized>(
+        heaps: &mut PairingHeaps<O::Key>,
+        mut all: u32,
+        order: &O,
+        n: u32,
+    ) {
         let mut popped = Vec::new();
         while let Some(v) = heaps.top(all) {
             popped.push(v);
             all = heaps.pop(all, order);
         }
-        let mut expected: Vec<u32> = (0..200).collect();
+        let mut expected: Vec<u32> = (0..n).collect();
         expected.sort_by(|&a, &b| {
             if order.above(a, b) {
                 std::cmp::Ordering::Less
@@ -212,20 +223,7 @@ mod tests {
             }
             all = heaps.meld(all, r, order);
         }
-        let mut popped = Vec::new();
-        while let Some(v) = heaps.top(all) {
-            popped.push(v);
-            all = heaps.pop(all, order);
-        }
-        let mut expected: Vec<u32> = (0..n).collect();
-        expected.sort_by(|&a, &b| {
-            if order.above(a, b) {
-                std::cmp::Ordering::Less
-            } else {
-                std::cmp::Ordering::Greater
-            }
-        });
-        assert_eq!(popped, expected);
+        assert_pops_in_order(&mut heaps, all, order, n);
     }
 
     proptest! {
