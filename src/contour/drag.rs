@@ -76,6 +76,7 @@ use super::marching::{
     Cancelled, TetTables, add_area_normals, corner, edge_fraction, end_gradient,
     interpolated_downhill, normalize, prefer_gradient,
 };
+use super::sweep::split_lengths;
 use super::{ContourMesh, PathSeed, path_seed};
 use crate::field::{Isovalue, Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
@@ -736,8 +737,8 @@ impl DraggedContour {
         let inverse = spacing.map(f64::recip);
         let iso = self.iso;
         {
-            let mut pos_parts = split(&mut positions, counts.iter().map(|&c| c as usize));
-            let mut grad_parts = split(&mut gradients, counts.iter().map(|&c| c as usize));
+            let mut pos_parts = split_lengths(&mut positions, counts.iter().map(|&c| c as usize));
+            let mut grad_parts = split_lengths(&mut gradients, counts.iter().map(|&c| c as usize));
             renumber
                 .par_chunks_mut(CHUNK)
                 .zip(self.refs.par_chunks(CHUNK))
@@ -781,7 +782,7 @@ impl DraggedContour {
             .collect();
         let total: usize = tri_counts.iter().sum();
         let mut indices = vec![0u32; 3 * total];
-        split(&mut indices, tri_counts.iter().map(|t| 3 * t))
+        split_lengths(&mut indices, tri_counts.iter().map(|t| 3 * t))
             .into_par_iter()
             .zip(self.pairs.par_chunks(CHUNK))
             .for_each(|(out, pairs)| {
@@ -851,17 +852,6 @@ impl DraggedContour {
 fn crossed_face(mask: u8, k: usize) -> bool {
     let others = mask & !(1 << k) & 0xf;
     others != 0 && others != 0xf & !(1 << k)
-}
-
-/// `s` cut into consecutive pieces of the given lengths.
-fn split<T>(mut s: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
-    let mut out = Vec::new();
-    for l in lengths {
-        let (a, b) = s.split_at_mut(l);
-        out.push(a);
-        s = b;
-    }
-    out
 }
 
 /// The slab component of one step: the arcs of the tree restricted to the

@@ -160,7 +160,10 @@ pub(crate) fn all_contours_by_sweep(
 }
 
 /// `s` cut into consecutive pieces of the given lengths.
-fn split_lengths<T>(mut s: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+pub(super) fn split_lengths<T>(
+    mut s: &mut [T],
+    lengths: impl Iterator<Item = usize>,
+) -> Vec<&mut [T]> {
     let mut out = Vec::new();
     for len in lengths {
         let (head, tail) = std::mem::take(&mut s).split_at_mut(len);
