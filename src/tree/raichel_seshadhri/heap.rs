@@ -146,7 +146,6 @@ impl<K: Copy> PairingHeaps<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::VertexOrder;
 
     #[test]
     fn melded_heaps_pop_in_descending_order() {
