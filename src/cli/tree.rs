@@ -49,6 +49,11 @@ pub struct Args {
     /// the times printed are of the uncounted one).
     #[arg(long)]
     pub count_comparisons: bool,
+    /// Cut the volume into N blocks whose join and split trees are
+    /// computed in parallel and glued (the same tree for every N; default:
+    /// as many as keep every core busy, 1 on two cores).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub blocks: Option<u32>,
 }
 
 /// The contour tree engines.
@@ -82,7 +87,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (tree, timing) = match args.algorithm {
         Algorithm::CarrSnoeyinkAxen => {
             let (tree, times) =
-                ContourTree::from_field(field, bar.progress()).map_err(cancelled)?;
+                match args.blocks {
+                    Some(b) => ContourTree::from_field_in_blocks(field, b as usize, bar.progress()),
+                    None => ContourTree::from_field(field, bar.progress()),
+                }
+                .map_err(cancelled)?;
             (tree, Timing::Engine(times))
         }
         Algorithm::RaichelSeshadhri => {

@@ -22,6 +22,14 @@ pub trait Mesh: Sync {
     /// Calls `f` once for every vertex that shares an edge with `v`.
     fn for_each_neighbour(&self, v: u32, f: impl FnMut(u32));
 
+    /// A bound on `|u - v|` over the edges: blocks of consecutive ids meet
+    /// only within this distance of the cut between them (the divide and
+    /// conquer's bands). The default, `n`, is always true and makes every
+    /// vertex of a block a band vertex.
+    fn edge_span(&self) -> usize {
+        self.num_vertices()
+    }
+
     /// Hints the memory system that `data[u]` will soon be read for the
     /// neighbours u of `v` (a sweep visits vertices in value order, far
     /// apart in memory, so overlapping these misses is most of its speed).
@@ -301,6 +309,15 @@ impl Mesh for FreudenthalGrid {
         self.dims[0] * self.dims[1] * self.dims[2]
     }
 
+    /// The longest edge in ids: (1, 1, 1), one plane, one row and one step.
+    fn edge_span(&self) -> usize {
+        self.interior_offsets
+            .iter()
+            .map(|o| o.unsigned_abs() as usize)
+            .max()
+            .unwrap_or(0)
+    }
+
     #[inline(always)]
     fn link_code(&self, v: u32, mut above: impl FnMut(u32) -> bool) -> u8 {
         let present = self.present(v);
@@ -426,6 +443,7 @@ impl Mesh for FreudenthalGrid {
 pub struct EdgeListMesh {
     offsets: Vec<usize>,
     neighbours: Vec<u32>,
+    span: usize,
 }
 
 impl EdgeListMesh {
@@ -447,9 +465,11 @@ impl EdgeListMesh {
             neighbours[fill[b as usize]] = a;
             fill[b as usize] += 1;
         }
+        let span = edges.iter().map(|&(a, b)| a.abs_diff(b) as usize).max().unwrap_or(0);
         Self {
             offsets: deg,
             neighbours,
+            span,
         }
     }
 }
@@ -457,6 +477,10 @@ impl EdgeListMesh {
 impl Mesh for EdgeListMesh {
     fn num_vertices(&self) -> usize {
         self.offsets.len() - 1
+    }
+
+    fn edge_span(&self) -> usize {
+        self.span
     }
 
     fn for_each_neighbour(&self, v: u32, mut f: impl FnMut(u32)) {

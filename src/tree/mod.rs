@@ -22,6 +22,7 @@
 //! vertex. The finished tree keeps 8 bytes (`vertex_arc` and
 //! `arc_vertices`) plus O(supernodes).
 
+pub mod blocks;
 pub mod json;
 mod merge;
 pub mod raichel_seshadhri;
@@ -154,22 +155,51 @@ impl ContourTree {
         field: &ScalarField,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), Cancelled> {
+        let blocks = blocks::default_blocks(field.len(), field.mesh().edge_span());
+        Self::from_field_in_blocks(field, blocks, progress)
+    }
+
+    /// Builds the tree of a grid field with its join and split trees
+    /// computed in `blocks` blocks ([`blocks`]); the same tree as
+    /// [`Self::from_field`], which picks the number for the machine.
+    pub fn from_field_in_blocks(
+        field: &ScalarField,
+        blocks: usize,
+        progress: &Progress,
+    ) -> Result<(Self, BuildTimes), Cancelled> {
         let t = Instant::now();
         progress.stage("sort");
         let order = field.vertex_order();
         let sort = t.elapsed();
         let mesh = field.mesh();
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build(&mesh, v.as_slice(), &order, progress))?;
+        let cuts = blocks::even_cuts(field.len(), blocks);
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_in_blocks(&mesh, v.as_slice(), &order, &cuts, progress))?;
         times.sort = sort;
         Ok((tree, times))
     }
 
     /// Builds the tree of any mesh given its vertex order: `values` compares
-    /// two vertices, `order` lists them ascending.
+    /// two vertices, `order` lists them ascending. Blocks as
+    /// [`blocks::default_blocks`] says.
     pub fn build<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
         values: &O,
         order: &[u32],
+        progress: &Progress,
+    ) -> Result<(Self, BuildTimes), Cancelled> {
+        let n = mesh.num_vertices();
+        let cuts = blocks::even_cuts(n, blocks::default_blocks(n, mesh.edge_span()));
+        Self::build_in_blocks(mesh, values, order, &cuts, progress)
+    }
+
+    /// [`Self::build`] with the join and split trees computed in the blocks
+    /// of consecutive ids that `cuts` bounds (`0 = cuts[0] < ... = n`),
+    /// then glued ([`blocks`]): the same tree for any cuts.
+    pub fn build_in_blocks<M: Mesh, O: VertexOrder + ?Sized>(
+        mesh: &M,
+        values: &O,
+        order: &[u32],
+        cuts: &[u32],
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), Cancelled> {
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
@@ -185,19 +215,9 @@ impl ContourTree {
         let codes = sweep::link_codes(mesh, values);
         let candidates = sweep::count_candidates(&codes);
         times.links = t.elapsed();
-        let (join, split) = rayon::join(
-            || {
-                let t = Instant::now();
-                sweep::join_tree(mesh, values, &codes, candidates, order, progress)
-                    .map(|s| (s, t.elapsed()))
-            },
-            || {
-                let t = Instant::now();
-                sweep::split_tree(mesh, values, &codes, candidates, order, &Progress::new())
-                    .map(|s| (s, t.elapsed()))
-            },
-        );
-        let ((mut join, tj), (mut split, ts)) = (join?, split?);
+        let ((mut join, tj), (mut split, ts)) = blocks::sweep_trees(
+            mesh, values, &codes, candidates, order, cuts, progress,
+        )?;
         drop(codes);
         progress.check(0, 1)?;
         times.join = tj;

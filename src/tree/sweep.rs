@@ -92,7 +92,7 @@ pub fn count_candidates(link_codes: &[u8]) -> usize {
 
 /// Marks a union-find root; the rest of a root's word is the component's
 /// last candidate.
-const ROOT: u32 = 1 << 31;
+pub(super) const ROOT: u32 = 1 << 31;
 
 /// The join tree: sweeps `order` (ascending) from its end.
 pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
@@ -103,7 +103,7 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<JoinTree, Cancelled> {
-    sweep(mesh, values, link_codes, candidates, true, order, progress).map(JoinTree)
+    whole(mesh, values, link_codes, candidates, true, order, progress, true).map(JoinTree)
 }
 
 /// The split tree: sweeps `order` (ascending) from its start.
@@ -115,20 +115,13 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<SplitTree, Cancelled> {
-    sweep(mesh, values, link_codes, candidates, false, order, progress).map(SplitTree)
+    whole(mesh, values, link_codes, candidates, false, order, progress, true).map(SplitTree)
 }
 
-/// One sweep (descending for the join tree, ascending for the split tree).
-/// `values` gives the vertex order; testing "already swept" on it rather
-/// than on the union-find keeps the hot loop in the compact value array.
-///
-/// The union-find is over the candidates only: a vertex's one word is
-/// `CANDIDATE | c` for candidate `c`, otherwise its leafward candidate,
-/// which is in its component, so `find` starts there. A vertex that is not
-/// a candidate is never a union-find node: it costs one read of a
-/// neighbour's word, a `find` in the (on smooth fields, cache-sized)
-/// candidate forest and one write.
-fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
+/// One sweep over the whole mesh: one block, whose nodes are the candidates.
+/// It sets the progress fraction if it `report`s.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
     link_codes: &[u8],
@@ -136,130 +129,285 @@ fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     join: bool,
     order: &[u32],
     progress: &Progress,
+    report: bool,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
     let mut leafward = vec![NONE; n];
-    // uf[c]: ROOT | last candidate of the component at a root, otherwise
-    // the parent in the union-find forest.
-    let mut uf = vec![NONE; candidates];
-    let mut rank = vec![0u8; candidates];
-    let mut parent = vec![NONE; candidates];
-    let mut children = vec![0u8; candidates];
-    // Only the split sweep lists the candidates' vertices (they are the
-    // same for both).
-    let mut vertex = vec![0u32; if join { 0 } else { candidates }];
+    let block = Block::new(0, n as u32, n, 0);
+    let swept = sweep(
+        mesh,
+        values,
+        link_codes,
+        candidates,
+        join,
+        order,
+        block,
+        &mut leafward,
+        !join,
+        progress,
+        report,
+    )?;
+    Ok(SweepTree {
+        parent: swept.parent,
+        children: swept.children,
+        leafward,
+        vertex: swept.vertex,
+    })
+}
+
+/// Consecutive vertex ids `lo..hi` swept on their own, as one block of the
+/// divide and conquer ([`super::blocks`]). Its *band* is the vertices
+/// within the mesh's [`Mesh::edge_span`] of a cut to another block: only
+/// they can have neighbours outside. Band vertices are nodes of the
+/// block's trees, like the candidates, so that the blocks can be glued.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Block {
+    /// First vertex.
+    pub lo: u32,
+    /// One past the last vertex.
+    pub hi: u32,
+    /// Vertices `inner_lo..inner_hi` are not in the band.
+    inner_lo: u32,
+    inner_hi: u32,
+}
+
+impl Block {
+    /// The block `lo..hi` of a mesh of `n` vertices whose edges join ids at
+    /// most `span` apart.
+    pub fn new(lo: u32, hi: u32, n: usize, span: usize) -> Self {
+        let inner_lo = if lo == 0 {
+            lo
+        } else {
+            (lo as u64 + span as u64).min(hi as u64) as u32
+        };
+        let inner_hi = if hi as usize == n {
+            hi
+        } else {
+            (hi as u64).saturating_sub(span as u64).max(lo as u64) as u32
+        };
+        Self {
+            lo,
+            hi,
+            inner_lo,
+            inner_hi,
+        }
+    }
+
+    /// True if `v` is in the block.
+    #[inline(always)]
+    pub fn contains(&self, v: u32) -> bool {
+        self.lo <= v && v < self.hi
+    }
+
+    /// True if `v` (in the block) may have a neighbour outside it.
+    #[inline(always)]
+    pub fn in_band(&self, v: u32) -> bool {
+        v < self.inner_lo || v >= self.inner_hi
+    }
+
+    /// The nodes of the block's trees: its candidates and its band.
+    pub fn count_nodes(&self, link_codes: &[u8]) -> usize {
+        let (lo, hi) = (self.lo as usize, self.hi as usize);
+        let (ilo, ihi) = (self.inner_lo as usize, self.inner_hi.max(self.inner_lo) as usize);
+        let band = (ilo - lo) + (hi - ihi);
+        band + count_candidates(&link_codes[ilo..ihi])
+    }
+}
+
+/// A block's join or split tree on its nodes, numbered in the vertex order
+/// within the block.
+pub(super) struct BlockTree {
+    /// Per node: its parent node, `NONE` at a root.
+    pub parent: Vec<u32>,
+    /// Per node: the components it joins.
+    pub children: Vec<u8>,
+    /// Per node: its vertex, ascending (only when asked for).
+    pub vertex: Vec<u32>,
+}
+
+/// One sweep of `block` (descending for the join tree, ascending for the
+/// split tree) on the edges inside it, with `nodes` nodes (its candidates
+/// and band). `leafward` is the block's part of the per-vertex word
+/// (`leafward[v - lo]`). `values` gives the vertex order; testing "already
+/// swept" on it rather than on the union-find keeps the hot loop in the
+/// compact value array. Only a `report`ing sweep sets the progress
+/// fraction; every sweep stops when it is cancelled.
+///
+/// The union-find is over the nodes only: a vertex's one word is
+/// `CANDIDATE | c` for node `c`, otherwise its leafward node, which is in
+/// its component, so `find` starts there. A vertex that is not a node is
+/// never a union-find node: it costs one read of a neighbour's word, a
+/// `find` in the (on smooth fields, cache-sized) node forest and one write.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
+    mesh: &M,
+    values: &O,
+    link_codes: &[u8],
+    nodes: usize,
+    join: bool,
+    order: &[u32],
+    block: Block,
+    leafward: &mut [u32],
+    keep_vertex: bool,
+    progress: &Progress,
+    report: bool,
+) -> Result<BlockTree, Cancelled> {
+    let n = order.len();
+    let lo = block.lo;
+    debug_assert_eq!(leafward.len(), (block.hi - lo) as usize);
+    let whole = lo == 0 && block.hi as usize == n;
+    // uf[c]: ROOT | last node of the component at a root, otherwise the
+    // parent in the union-find forest.
+    let mut uf = vec![NONE; nodes];
+    let mut rank = vec![0u8; nodes];
+    let mut parent = vec![NONE; nodes];
+    let mut children = vec![0u8; nodes];
+    let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
-    // The candidate number of the next candidate visited.
-    let mut next: u32 = if join { candidates as u32 } else { 0 };
-    const CHECK_EVERY: usize = 1 << 20;
+    // The number of the next node visited.
+    let mut next: u32 = if join { nodes as u32 } else { 0 };
+    // The block's vertices in sweep order, a chunk of the order at a time.
+    const CHUNK: usize = 1 << 16;
+    let mut visit: Vec<u32> = Vec::with_capacity(CHUNK);
     // How far ahead in the order to prefetch: enough vertices in flight to
     // hide DRAM latency, few enough that the lines are still in L1/L2.
     const AHEAD: usize = 12;
-    for i in 0..n {
-        if i % CHECK_EVERY == 0 {
-            progress.check(i, n)?;
+    for start in (0..n).step_by(CHUNK) {
+        if start % (1 << 20) == 0 {
+            if report {
+                progress.check(start, n)?;
+            } else if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
         }
-        let at = |i: usize| if join { order[n - 1 - i] } else { order[i] };
-        let v = at(i);
-        if i + AHEAD < n {
-            // A vertex that is not a candidate reads one neighbour's word
-            // and writes its own: two lines, not its whole star. Its code
-            // was prefetched AHEAD vertices ago.
-            let w = at(i + AHEAD);
-            let cw = link_codes[w as usize];
-            if is_candidate(cw) {
-                mesh.prefetch_star(w, &leafward);
+        let end = (start + CHUNK).min(n);
+        visit.clear();
+        if join {
+            let part = &order[n - end..n - start];
+            if whole {
+                visit.extend(part.iter().rev());
             } else {
-                let c = if join { cw & 0xf } else { cw >> 4 };
-                prefetch(&leafward, mesh.neighbour_at(w, c) as usize);
-                prefetch(&leafward, w as usize);
+                visit.extend(part.iter().rev().filter(|&&v| block.contains(v)));
             }
-            if i + 2 * AHEAD < n {
-                let w2 = at(i + 2 * AHEAD) as usize;
-                prefetch(link_codes, w2);
-            }
-        }
-        let full = link_codes[v as usize];
-        let code = if join { full & 0xf } else { full >> 4 };
-        if !is_candidate(full) {
-            // One component beyond v, reached through one neighbour: v
-            // remembers its last candidate. Nothing else.
-            let u = mesh.neighbour_at(v, code);
-            let r = find(&mut uf, leafward[u as usize] & !CANDIDATE);
-            leafward[v as usize] = uf[r as usize] & !ROOT;
-            continue;
-        }
-        let kid = if join {
-            next -= 1;
-            next
         } else {
-            next += 1;
-            next - 1
-        };
-        leafward[v as usize] = CANDIDATE | kid;
-        if !join {
-            vertex[kid as usize] = v;
+            let part = &order[start..end];
+            if whole {
+                visit.extend_from_slice(part);
+            } else {
+                visit.extend(part.iter().filter(|&&v| block.contains(v)));
+            }
         }
-        let mut root = kid;
-        uf[kid as usize] = ROOT | kid;
-        let mut merged = 0u8;
-        // One representative per component of the swept part of v's link.
-        reps.clear();
-        match code {
-            LINK_EMPTY => {}
-            LINK_SEVERAL => {
-                if join {
-                    mesh.for_each_link_component(v, |u| values.above(u, v), |u| reps.push(u));
+        for (i, &v) in visit.iter().enumerate() {
+            if let Some(&w) = visit.get(i + AHEAD) {
+                // A vertex that is not a node reads one neighbour's word
+                // and writes its own: two lines, not its whole star. Its
+                // code was prefetched AHEAD vertices ago. (Indices are
+                // relative to the block: the hints only add offsets.)
+                let cw = link_codes[w as usize];
+                if is_candidate(cw) || block.in_band(w) {
+                    mesh.prefetch_star(w - lo, leafward);
                 } else {
-                    mesh.for_each_link_component(v, |u| values.above(v, u), |u| reps.push(u));
+                    let c = if join { cw & 0xf } else { cw >> 4 };
+                    prefetch(leafward, (mesh.neighbour_at(w, c) - lo) as usize);
+                    prefetch(leafward, (w - lo) as usize);
+                }
+                if let Some(&w2) = visit.get(i + 2 * AHEAD) {
+                    prefetch(link_codes, w2 as usize);
                 }
             }
-            index => reps.push(mesh.neighbour_at(v, index)),
-        }
-        for &u in &reps {
-            let r = find(&mut uf, leafward[u as usize] & !CANDIDATE);
-            if r == root {
+            let full = link_codes[v as usize];
+            let code = if join { full & 0xf } else { full >> 4 };
+            let band = block.in_band(v);
+            if !band && !is_candidate(full) {
+                // One component beyond v, reached through one neighbour: v
+                // remembers its last node. Nothing else.
+                let u = mesh.neighbour_at(v, code);
+                let r = find(&mut uf, leafward[(u - lo) as usize] & !CANDIDATE);
+                leafward[(v - lo) as usize] = uf[r as usize] & !ROOT;
                 continue;
             }
-            // Component r is absorbed at v: the tree edge runs from its
-            // last candidate to v.
-            let last = uf[r as usize] & !ROOT;
-            parent[last as usize] = kid;
-            merged += 1;
-            if root == kid {
-                // v is still a singleton: hang it under r. Its rank is 0, so
-                // r's rank stays a valid bound on height without reading it.
-                uf[kid as usize] = r;
-                uf[r as usize] = ROOT | kid;
-                root = r;
-                continue;
-            }
-            let (hi, lo) = if rank[r as usize] > rank[root as usize] {
-                (r, root)
+            let kid = if join {
+                next -= 1;
+                next
             } else {
-                (root, r)
+                next += 1;
+                next - 1
             };
-            if rank[hi as usize] == rank[lo as usize] {
-                rank[hi as usize] += 1;
+            leafward[(v - lo) as usize] = CANDIDATE | kid;
+            if keep_vertex {
+                vertex[kid as usize] = v;
             }
-            uf[lo as usize] = hi;
-            uf[hi as usize] = ROOT | kid;
-            root = hi;
+            let mut root = kid;
+            uf[kid as usize] = ROOT | kid;
+            let mut merged = 0u8;
+            // One representative per component of the swept part of v's
+            // link (inside the block).
+            reps.clear();
+            let swept = |u: u32| if join { values.above(u, v) } else { values.above(v, u) };
+            if band {
+                mesh.for_each_neighbour(v, |u| {
+                    if block.contains(u) && swept(u) {
+                        reps.push(u)
+                    }
+                });
+            } else {
+                match code {
+                    LINK_EMPTY => {}
+                    LINK_SEVERAL => mesh.for_each_link_component(v, swept, |u| reps.push(u)),
+                    index => reps.push(mesh.neighbour_at(v, index)),
+                }
+            }
+            for &u in &reps {
+                let r = find(&mut uf, leafward[(u - lo) as usize] & !CANDIDATE);
+                if r == root {
+                    continue;
+                }
+                // Component r is absorbed at v: the tree edge runs from its
+                // last node to v.
+                let last = uf[r as usize] & !ROOT;
+                parent[last as usize] = kid;
+                merged += 1;
+                root = union(&mut uf, &mut rank, root, r, kid);
+            }
+            children[kid as usize] = merged;
         }
-        children[kid as usize] = merged;
     }
-    debug_assert_eq!(next, if join { 0 } else { candidates as u32 });
-    Ok(SweepTree {
+    debug_assert_eq!(next, if join { 0 } else { nodes as u32 });
+    Ok(BlockTree {
         parent,
         children,
-        leafward,
         vertex,
     })
 }
 
+/// Unites the component of `root` with the other component `r` when the
+/// node `kid` is visited (`root == kid` while `kid` is still alone); the
+/// new root's word names `kid` as the last node. Returns the new root.
+#[inline(always)]
+pub(super) fn union(uf: &mut [u32], rank: &mut [u8], root: u32, r: u32, kid: u32) -> u32 {
+    if root == kid {
+        // kid is still a singleton: hang it under r. Its rank is 0, so r's
+        // rank stays a valid bound on height without reading it.
+        uf[kid as usize] = r;
+        uf[r as usize] = ROOT | kid;
+        return r;
+    }
+    let (hi, lo) = if rank[r as usize] > rank[root as usize] {
+        (r, root)
+    } else {
+        (root, r)
+    };
+    if rank[hi as usize] == rank[lo as usize] {
+        rank[hi as usize] += 1;
+    }
+    uf[lo as usize] = hi;
+    uf[hi as usize] = ROOT | kid;
+    hi
+}
+
 /// Root of `x`'s set, halving the path on the way.
 #[inline(always)]
-fn find(uf: &mut [u32], mut x: u32) -> u32 {
+pub(super) fn find(uf: &mut [u32], mut x: u32) -> u32 {
     loop {
         let p = uf[x as usize];
         if p & ROOT != 0 {

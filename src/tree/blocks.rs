@@ -1,0 +1,433 @@
+//! Divide and conquer: the join and split trees computed block by block on
+//! every core and glued along the cuts (Pascucci and Cole-McLaughlin,
+//! "Parallel computation of the topology of level sets", §4: a tree per
+//! block, then the trees of neighbouring blocks joined through the
+//! vertices they share).
+//!
+//! **Blocks.** The vertices are cut into blocks of consecutive ids (on a
+//! grid, slabs of planes). An edge joins ids at most [`Mesh::edge_span`]
+//! apart (one plane, one row and one step on a Freudenthal grid), so only
+//! the vertices within that distance of a cut, the block's *band*, can have
+//! neighbours in another block.
+//!
+//! **1. A sweep per block** ([`sweep::sweep`], both directions of every
+//! block at once): the union-find sweep of Carr, Snoeyink and Axen on the
+//! edges inside the block, whose *nodes* are its candidates and its band
+//! (every band vertex unites with all its swept neighbours in the block, as
+//! the paper's sweep does; a candidate inside uses its link components).
+//! It records each node's parent in the block's join (or split) tree on its
+//! nodes and, for every other vertex, the last node of the component it
+//! joined, exactly as the whole sweep does. A block tree is a join tree on
+//! its nodes, so two nodes are in one superlevel component of the block
+//! exactly when they are in one component of the tree edges above that
+//! level.
+//!
+//! **2. The glue.** The union of the block trees and of the mesh edges that
+//! cross a cut (both ends are band vertices, hence nodes) is a graph on all
+//! the nodes whose superlevel components, restricted to the nodes, are
+//! those of the whole mesh. One more sweep over this graph, the nodes in
+//! the vertex order (the blocks' sorted node lists merged), gives the join
+//! tree of the whole mesh on the nodes. A band vertex that is not a
+//! candidate has one component above it in the whole mesh, so it joins one
+//! component and is contracted away: the candidates' parents, their
+//! children counts, their numbers in the vertex order and the last
+//! candidate of each component come out exactly as the whole sweep makes
+//! them.
+//!
+//! **3. Every other vertex**, in parallel in id order: its block gave it
+//! `x`, the last node of its component in the block when it was swept. In
+//! the glued tree its component at that moment is the subtree of the last
+//! ancestor `y` of `x` still swept before it (a short walk: only nodes of
+//! other blocks that joined in between lie on it), and its leafward
+//! candidate is the lowest candidate of that subtree, kept per node by the
+//! glue.
+//!
+//! The result is the [`JoinTree`] and [`SplitTree`] of the whole sweep,
+//! word for word (the tests compare them), so merge and augmentation do not
+//! know blocks were used.
+//!
+//! **Memory.** The per-vertex words are those of the whole sweep (4 bytes
+//! per vertex and direction); the blocks' union-finds are per node, as the
+//! whole sweep's are per candidate; the glue adds about 40 bytes per node
+//! (both directions), released before the merge. Bands cost two planes per
+//! cut: 2 (B - 1) X Y nodes for B blocks, about 1.5 % of a 512³ volume cut
+//! in 8.
+//!
+//! **Blocks as values.** A block's result is plain data: its node list
+//! (vertex ids, ascending), its two block trees (parent and children per
+//! node), and per vertex its leafward node. Nothing in it points into
+//! another block, and the glue reads of the other blocks only the nodes'
+//! vertices, their trees and the band's words. So a block could be computed
+//! in another process and sent as these arrays; the glue would then run on
+//! the nodes alone, and step 3 on each block where its words live. Only the
+//! nodes (candidates and bands) cross the wire: a few per cent of the
+//! vertices on smooth fields.
+
+use super::sweep::{
+    self, Block, BlockTree, CANDIDATE, JoinTree, NONE, ROOT, SplitTree, SweepTree, find,
+    is_candidate, union,
+};
+use crate::field::VertexOrder;
+use crate::mesh::Mesh;
+use crate::progress::{Cancelled, Progress};
+use rayon::prelude::*;
+use std::cmp::Ordering;
+use std::time::{Duration, Instant};
+
+/// Cuts of the ids `0..n` into `blocks` blocks of nearly equal size:
+/// `blocks + 1` ids from 0 to n (fewer blocks if there are fewer ids).
+pub fn even_cuts(n: usize, blocks: usize) -> Vec<u32> {
+    let b = blocks.clamp(1, n.max(1));
+    (0..=b).map(|i| (i * n / b) as u32).collect()
+}
+
+/// How many blocks the engine cuts a mesh of `n` vertices into by default:
+/// enough that the two sweeps of all blocks keep every core busy (one block
+/// on two cores or fewer, where the join and split sweeps already run side
+/// by side), but no block thinner than 16 bands.
+pub fn default_blocks(n: usize, span: usize) -> usize {
+    let threads = rayon::current_num_threads();
+    if threads <= 2 {
+        return 1;
+    }
+    let thickest = n / (16 * span.max(1));
+    threads.div_ceil(2).min(thickest).max(1)
+}
+
+/// The join and split trees of the whole mesh, computed in the blocks
+/// `cuts` defines (`cuts[0] = 0 < cuts[1] < ... = n`) and glued, with the
+/// time each took. Identical to [`sweep::join_tree`] and
+/// [`sweep::split_tree`].
+pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
+    mesh: &M,
+    values: &O,
+    link_codes: &[u8],
+    candidates: usize,
+    order: &[u32],
+    cuts: &[u32],
+    progress: &Progress,
+) -> Result<((JoinTree, Duration), (SplitTree, Duration)), Cancelled> {
+    let n = mesh.num_vertices();
+    assert!(
+        cuts.first() == Some(&0)
+            && cuts.last() == Some(&(n as u32))
+            && cuts.windows(2).all(|w| w[0] < w[1]),
+        "cuts run from 0 to n, increasing"
+    );
+    if cuts.len() <= 2 {
+        let (join, split) = rayon::join(
+            || {
+                let t = Instant::now();
+                sweep::whole(mesh, values, link_codes, candidates, true, order, progress, true)
+                    .map(|s| (JoinTree(s), t.elapsed()))
+            },
+            || {
+                let t = Instant::now();
+                sweep::whole(mesh, values, link_codes, candidates, false, order, progress, false)
+                    .map(|s| (SplitTree(s), t.elapsed()))
+            },
+        );
+        return Ok((join?, split?));
+    }
+    let t = Instant::now();
+    let span = mesh.edge_span();
+    let blocks: Vec<Block> = cuts
+        .windows(2)
+        .map(|w| Block::new(w[0], w[1], n, span))
+        .collect();
+    let nodes_in: Vec<usize> = blocks
+        .par_iter()
+        .map(|b| b.count_nodes(link_codes))
+        .collect();
+    let mut offset = vec![0u32; blocks.len() + 1];
+    for (b, &k) in nodes_in.iter().enumerate() {
+        offset[b + 1] = offset[b] + k as u32;
+    }
+
+    // 1. Both sweeps of every block, all at once.
+    let mut join_words = vec![NONE; n];
+    let mut split_words = vec![NONE; n];
+    let mut tasks: Vec<(bool, usize, &mut [u32])> = Vec::with_capacity(2 * blocks.len());
+    for (join, words) in [(true, &mut join_words), (false, &mut split_words)] {
+        let mut rest = words.as_mut_slice();
+        for (b, block) in blocks.iter().enumerate() {
+            let (head, tail) = rest.split_at_mut((block.hi - block.lo) as usize);
+            tasks.push((join, b, head));
+            rest = tail;
+        }
+    }
+    let trees: Vec<BlockTree> = tasks
+        .into_par_iter()
+        .map(|(join, b, words)| {
+            if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
+            let tree = sweep::sweep(
+                mesh,
+                values,
+                link_codes,
+                nodes_in[b],
+                join,
+                order,
+                blocks[b],
+                words,
+                !join,
+                progress,
+                join && b == 0,
+            );
+            if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
+            tree
+        })
+        .collect::<Result<_, _>>()?;
+    let (join_trees, split_trees) = trees.split_at(blocks.len());
+
+    // 2. The nodes in the vertex order: the blocks' sorted lists merged.
+    let node_vertex: Vec<u32> = split_trees
+        .iter()
+        .flat_map(|t| t.vertex.iter().copied())
+        .collect();
+    let mut by_order: Vec<u32> = (0..node_vertex.len() as u32).collect();
+    by_order.par_sort_by(|&a, &b| {
+        let (u, v) = (node_vertex[a as usize], node_vertex[b as usize]);
+        if values.above(u, v) {
+            Ordering::Greater
+        } else if values.above(v, u) {
+            Ordering::Less
+        } else {
+            Ordering::Equal
+        }
+    });
+    progress.check(0, 1)?;
+    let gluing = Gluing {
+        mesh,
+        values,
+        link_codes,
+        candidates,
+        blocks: &blocks,
+        offset: &offset,
+        node_vertex: &node_vertex,
+        by_order: &by_order,
+    };
+    let (join_glue, split_glue) = rayon::join(
+        || gluing.glue(true, join_trees, &join_words),
+        || gluing.glue(false, split_trees, &split_words),
+    );
+    drop(trees);
+    progress.check(0, 1)?;
+
+    // 3. Every vertex's final word.
+    rayon::join(
+        || gluing.place(true, &join_glue, &mut join_words),
+        || gluing.place(false, &split_glue, &mut split_words),
+    );
+    let elapsed = t.elapsed();
+    let join = SweepTree {
+        parent: join_glue.parent,
+        children: join_glue.children,
+        leafward: join_words,
+        vertex: Vec::new(),
+    };
+    let split = SweepTree {
+        parent: split_glue.parent,
+        children: split_glue.children,
+        leafward: split_words,
+        vertex: split_glue.vertex,
+    };
+    Ok(((JoinTree(join), elapsed), (SplitTree(split), elapsed)))
+}
+
+/// What the glue of one direction leaves.
+struct Glued {
+    /// Per candidate: its parent candidate, `NONE` at the root.
+    parent: Vec<u32>,
+    /// Per candidate: its number of children.
+    children: Vec<u8>,
+    /// The candidates' vertices, ascending (split direction only).
+    vertex: Vec<u32>,
+    /// Per node: the node that absorbed its component while it was the
+    /// component's last node (its parent in the glued tree on the nodes).
+    node_parent: Vec<u32>,
+    /// Per node: the lowest candidate of its subtree (join) / highest
+    /// (split), by number.
+    lowest: Vec<u32>,
+    /// Per node: its final word (`CANDIDATE | number` for a candidate).
+    word: Vec<u32>,
+}
+
+/// What both glues read.
+struct Gluing<'a, M, O: ?Sized> {
+    mesh: &'a M,
+    values: &'a O,
+    link_codes: &'a [u8],
+    candidates: usize,
+    blocks: &'a [Block],
+    /// Node `offset[b] + i` is node `i` of block `b`.
+    offset: &'a [u32],
+    node_vertex: &'a [u32],
+    /// All nodes, ascending in the vertex order.
+    by_order: &'a [u32],
+}
+
+impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
+    /// The block holding vertex `v`.
+    fn block_of(&self, v: u32) -> usize {
+        self.blocks.partition_point(|b| b.hi <= v)
+    }
+
+    /// True if `u` is swept before `v` in this direction.
+    fn before(&self, join: bool, u: u32, v: u32) -> bool {
+        if join {
+            self.values.above(u, v)
+        } else {
+            self.values.above(v, u)
+        }
+    }
+
+    /// The sweep over all nodes: block tree edges and the mesh edges that
+    /// cross a cut (`words` names each band vertex's node in its block).
+    fn glue(&self, join: bool, trees: &[BlockTree], words: &[u32]) -> Glued {
+        let k = self.node_vertex.len();
+        // Children of every node in the block trees (the edges to nodes
+        // swept before it).
+        let mut first = vec![0u32; k + 1];
+        for (b, t) in trees.iter().enumerate() {
+            for &p in &t.parent {
+                if p != NONE {
+                    first[(self.offset[b] + p) as usize + 1] += 1;
+                }
+            }
+        }
+        for i in 0..k {
+            first[i + 1] += first[i];
+        }
+        let mut fill = first.clone();
+        let mut child = vec![0u32; first[k] as usize];
+        for (b, t) in trees.iter().enumerate() {
+            for (c, &p) in t.parent.iter().enumerate() {
+                if p != NONE {
+                    let p = (self.offset[b] + p) as usize;
+                    child[fill[p] as usize] = self.offset[b] + c as u32;
+                    fill[p] += 1;
+                }
+            }
+        }
+        drop(fill);
+
+        let mut uf = vec![NONE; k];
+        let mut rank = vec![0u8; k];
+        let mut node_parent = vec![NONE; k];
+        let mut lowest = vec![NONE; k];
+        let mut word = vec![NONE; k];
+        let mut parent = vec![NONE; self.candidates];
+        let mut children = vec![0u8; self.candidates];
+        let mut vertex = Vec::with_capacity(if join { 0 } else { self.candidates });
+        let mut next: u32 = if join { self.candidates as u32 } else { 0 };
+        let mut reps: Vec<u32> = Vec::with_capacity(16);
+        let visit: Box<dyn Iterator<Item = &u32>> = if join {
+            Box::new(self.by_order.iter().rev())
+        } else {
+            Box::new(self.by_order.iter())
+        };
+        for &g in visit {
+            let v = self.node_vertex[g as usize];
+            reps.clear();
+            reps.extend_from_slice(&child[first[g as usize] as usize..first[g as usize + 1] as usize]);
+            let b = self.block_of(v);
+            let block = self.blocks[b];
+            if block.in_band(v) {
+                self.mesh.for_each_neighbour(v, |w| {
+                    if !block.contains(w) && self.before(join, w, v) {
+                        let bw = self.block_of(w);
+                        debug_assert!(words[w as usize] & CANDIDATE != 0, "a band vertex is a node");
+                        reps.push(self.offset[bw] + (words[w as usize] & !CANDIDATE));
+                    }
+                });
+            }
+            let candidate = is_candidate(self.link_codes[v as usize]);
+            let kid = if !candidate {
+                NONE
+            } else if join {
+                next -= 1;
+                next
+            } else {
+                next += 1;
+                next - 1
+            };
+            uf[g as usize] = ROOT | g;
+            let mut root = g;
+            let mut merged = 0u8;
+            let mut joined = NONE;
+            for &x in &reps {
+                let r = find(&mut uf, x);
+                if r == root {
+                    continue;
+                }
+                let last = uf[r as usize] & !ROOT;
+                node_parent[last as usize] = g;
+                if candidate {
+                    parent[lowest[last as usize] as usize] = kid;
+                }
+                joined = last;
+                merged += 1;
+                root = union(&mut uf, &mut rank, root, r, g);
+            }
+            if candidate {
+                lowest[g as usize] = kid;
+                word[g as usize] = CANDIDATE | kid;
+                children[kid as usize] = merged;
+                if !join {
+                    vertex.push(v);
+                }
+            } else {
+                // One component beyond a vertex that is not a candidate:
+                // it is regular in the whole tree, and contracted away.
+                debug_assert_eq!(merged, 1, "a band vertex that is not a candidate joins one component");
+                if joined != NONE {
+                    lowest[g as usize] = lowest[joined as usize];
+                }
+                word[g as usize] = lowest[g as usize];
+            }
+        }
+        debug_assert_eq!(next, if join { 0 } else { self.candidates as u32 });
+        Glued {
+            parent,
+            children,
+            vertex,
+            node_parent,
+            lowest,
+            word,
+        }
+    }
+
+    /// Step 3: every vertex's word, from its block's word and the glue.
+    fn place(&self, join: bool, glued: &Glued, words: &mut [u32]) {
+        const CHUNK: usize = 1 << 16;
+        let mut rest = words;
+        for (b, block) in self.blocks.iter().enumerate() {
+            let (mine, tail) = rest.split_at_mut((block.hi - block.lo) as usize);
+            rest = tail;
+            let base = self.offset[b];
+            mine.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
+                let first = block.lo + (c * CHUNK) as u32;
+                for (i, w) in chunk.iter_mut().enumerate() {
+                    if *w & CANDIDATE != 0 {
+                        *w = glued.word[(base + (*w & !CANDIDATE)) as usize];
+                        continue;
+                    }
+                    let v = first + i as u32;
+                    let mut x = base + *w;
+                    loop {
+                        let p = glued.node_parent[x as usize];
+                        if p == NONE || !self.before(join, self.node_vertex[p as usize], v) {
+                            break;
+                        }
+                        x = p;
+                    }
+                    *w = glued.lowest[x as usize];
+                }
+            });
+        }
+    }
+}
