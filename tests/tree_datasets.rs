@@ -188,6 +188,38 @@ fn check_dataset(name: &str) {
         tree.arcs(),
         "{name}: arcs differ between runs"
     );
+
+    // Divide and conquer: the same tree, vertex for vertex, in 3 blocks on
+    // every thread and in 8 blocks on one.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    for (blocks, pool) in [(3, None), (8, Some(&one))] {
+        let build = || ContourTree::from_field_in_blocks(&field, blocks, &Progress::new());
+        let (blocked, _) = match pool {
+            Some(p) => p.install(build),
+            None => build(),
+        }
+        .expect("not cancelled");
+        assert_eq!(
+            blocked.nodes(),
+            tree.nodes(),
+            "{name}: nodes in {blocks} blocks"
+        );
+        assert_eq!(
+            blocked.arcs(),
+            tree.arcs(),
+            "{name}: arcs in {blocks} blocks"
+        );
+        for a in 0..tree.arcs().len() as u32 {
+            assert_eq!(
+                blocked.arc_vertices(ArcId(a)),
+                tree.arc_vertices(ArcId(a)),
+                "{name}: vertices of arc {a} in {blocks} blocks"
+            );
+        }
+    }
 }
 
 macro_rules! dataset_tests {

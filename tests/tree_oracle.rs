@@ -16,8 +16,10 @@ mod common;
 use flexiso::field::{ScalarField, Values};
 use flexiso::mesh::Mesh;
 use flexiso::progress::Progress;
-use flexiso::tree::{ArcId, ContourTree};
+use flexiso::tree::sweep::{self, JoinTree, SplitTree};
+use flexiso::tree::{ArcId, ContourTree, blocks};
 use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
 
 fn build(field: &ScalarField) -> ContourTree {
     ContourTree::from_field(field, &Progress::new())
@@ -189,4 +191,175 @@ proptest! {
             prop_assert_eq!(general.arc_vertices(ArcId(a)), fast.arc_vertices(ArcId(a)));
         }
     }
+}
+
+/// Random cuts of `0..n` into blocks of consecutive ids: any number of
+/// blocks from 2 up to one per vertex, at random places (so blocks one
+/// vertex thick, blocks thinner than a band, and cuts inside plateaus).
+fn random_cuts(n: usize, seed: u64) -> Vec<u32> {
+    let mut state = seed | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    if n < 2 {
+        return vec![0, n as u32];
+    }
+    let blocks = 2 + (next() % (n as u64 - 1)) as usize;
+    let mut inner: Vec<u32> = (1..n as u32).collect();
+    // A random subset of blocks - 1 inner cuts.
+    for i in 0..blocks - 1 {
+        let j = i + (next() % (inner.len() - i) as u64) as usize;
+        inner.swap(i, j);
+    }
+    inner.truncate(blocks - 1);
+    inner.sort_unstable();
+    let mut cuts = vec![0];
+    cuts.extend(inner);
+    cuts.push(n as u32);
+    cuts
+}
+
+/// The join and split trees of `mesh`, whole and in the blocks `cuts`.
+fn sweep_trees_both_ways<M: Mesh>(
+    mesh: &M,
+    values: &[u8],
+    order: &[u32],
+    cuts: &[u32],
+) -> ((JoinTree, SplitTree), (JoinTree, SplitTree)) {
+    let p = Progress::new();
+    let codes = sweep::link_codes(mesh, values);
+    let candidates = sweep::count_candidates(&codes);
+    let whole = (
+        sweep::join_tree(mesh, values, &codes, candidates, order, &p).expect("not cancelled"),
+        sweep::split_tree(mesh, values, &codes, candidates, order, &p).expect("not cancelled"),
+    );
+    let ((join, _), (split, _)) =
+        blocks::sweep_trees(mesh, values, &codes, candidates, order, cuts, &p)
+            .expect("not cancelled");
+    (whole, (join, split))
+}
+
+fn u8_values(field: &ScalarField) -> &[u8] {
+    let Values::U8(values) = field.values() else {
+        unreachable!("u8 grid")
+    };
+    values.as_slice()
+}
+
+/// Every vertex's place and every arc's vertices, in order.
+fn assert_same_tree(a: &ContourTree, b: &ContourTree) -> Result<(), TestCaseError> {
+    prop_assert_eq!(a.nodes(), b.nodes());
+    prop_assert_eq!(a.arcs(), b.arcs());
+    for arc in 0..a.arcs().len() as u32 {
+        prop_assert_eq!(a.arc_vertices(ArcId(arc)), b.arc_vertices(ArcId(arc)));
+    }
+    for v in 0..a.num_vertices() as u32 {
+        prop_assert_eq!(a.place(v), b.place(v));
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// Divide and conquer: the join and split trees computed in random
+    /// blocks and glued are the whole sweep's, word for word (parents,
+    /// children counts, every vertex's leafward candidate, the candidates'
+    /// vertices), on 3D grids with heavy ties.
+    #[test]
+    fn blocked_sweeps_equal_the_whole_sweeps_on_random_3d_grids(field in random_grid(), seed in any::<u64>()) {
+        let cuts = random_cuts(field.len(), seed);
+        let order = field.vertex_order();
+        let (whole, blocked) = sweep_trees_both_ways(&field.mesh(), u8_values(&field), &order, &cuts);
+        prop_assert_eq!(whole, blocked, "cuts {:?}", cuts);
+    }
+
+    #[test]
+    fn blocked_sweeps_equal_the_whole_sweeps_on_random_2d_grids(field in random_2d_grid(), seed in any::<u64>()) {
+        let cuts = random_cuts(field.len(), seed);
+        let order = field.vertex_order();
+        let (whole, blocked) = sweep_trees_both_ways(&field.mesh(), u8_values(&field), &order, &cuts);
+        prop_assert_eq!(whole, blocked, "cuts {:?}", cuts);
+    }
+
+    /// The blocked tree is the tree: same nodes, arcs, arc vertices in
+    /// order and place of every vertex, and it passes the oracles.
+    #[test]
+    fn blocked_tree_is_the_tree_on_random_grids(field in random_grid(), seed in any::<u64>()) {
+        let cuts = random_cuts(field.len(), seed);
+        let order = field.vertex_order();
+        let (blocked, _) = ContourTree::build_in_blocks(&field.mesh(), u8_values(&field), &order, &cuts, &Progress::new())
+            .expect("not cancelled");
+        assert_same_tree(&blocked, &build(&field))?;
+        common::tree_oracle::check_against_oracles(&field, &blocked);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    /// Blocks of a general mesh (its span from its edge list, every vertex
+    /// through the general link path), including meshes whose vertex ids
+    /// are shuffled so that edges reach far across the cuts.
+    #[test]
+    fn blocked_sweeps_equal_the_whole_sweeps_on_explicit_meshes(field in random_grid(), seed in any::<u64>(), shuffle in any::<bool>()) {
+        let n = field.len();
+        let grid = field.mesh();
+        let mut id: Vec<u32> = (0..n as u32).collect();
+        if shuffle {
+            let mut s = seed | 1;
+            for i in (1..n).rev() {
+                s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+                id.swap(i, (s % (i as u64 + 1)) as usize);
+            }
+        }
+        let mut values = vec![0u8; n];
+        for (v, &x) in u8_values(&field).iter().enumerate() {
+            values[id[v] as usize] = x;
+        }
+        let mut edges = Vec::new();
+        for v in 0..n as u32 {
+            grid.for_each_neighbour(v, |u| if u > v { edges.push((id[v as usize], id[u as usize])) });
+        }
+        let mesh = flexiso::mesh::EdgeListMesh::new(n, &edges);
+        let field2 = ScalarField::new([n, 1, 1], Values::U8(values.clone())).expect("valid");
+        let order = field2.vertex_order();
+        let cuts = random_cuts(n, seed.rotate_left(17));
+        let (whole, blocked) = sweep_trees_both_ways(&mesh, &values, &order, &cuts);
+        prop_assert_eq!(whole, blocked, "cuts {:?}", cuts);
+    }
+}
+
+/// The default number of blocks follows the thread count; the tree does
+/// not: built on 1, 2, 3, 4 and 8 threads, it is the same, vertex for
+/// vertex, on a grid large enough to be cut.
+#[test]
+fn tree_is_the_same_on_every_thread_count() {
+    let field = flexiso::field::synthetic::Synthetic {
+        dims: [40, 36, 48],
+        ..flexiso::field::synthetic::Synthetic::cube(1)
+    }
+    .with_noise(0.3, 7)
+    .generate();
+    let reference = build(&field);
+    let mut cut = 0;
+    for threads in [1, 2, 3, 4, 8] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let (blocks, tree) = pool.install(|| {
+            let mesh = field.mesh();
+            let blocks = flexiso::tree::blocks::default_blocks(field.len(), mesh.edge_span());
+            (blocks, build(&field))
+        });
+        if blocks > 1 {
+            cut += 1;
+        }
+        assert_same_tree(&tree, &reference).expect("same tree");
+    }
+    assert!(cut >= 2, "the larger pools cut the grid into blocks");
 }

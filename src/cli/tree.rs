@@ -86,12 +86,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let cancelled = |_| anyhow::anyhow!("cancelled");
     let (tree, timing) = match args.algorithm {
         Algorithm::CarrSnoeyinkAxen => {
-            let (tree, times) =
-                match args.blocks {
-                    Some(b) => ContourTree::from_field_in_blocks(field, b as usize, bar.progress()),
-                    None => ContourTree::from_field(field, bar.progress()),
-                }
-                .map_err(cancelled)?;
+            let (tree, times) = match args.blocks {
+                Some(b) => ContourTree::from_field_in_blocks(field, b as usize, bar.progress()),
+                None => ContourTree::from_field(field, bar.progress()),
+            }
+            .map_err(cancelled)?;
             (tree, Timing::Engine(times))
         }
         Algorithm::RaichelSeshadhri => {

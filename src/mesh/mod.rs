@@ -465,7 +465,11 @@ impl EdgeListMesh {
             neighbours[fill[b as usize]] = a;
             fill[b as usize] += 1;
         }
-        let span = edges.iter().map(|&(a, b)| a.abs_diff(b) as usize).max().unwrap_or(0);
+        let span = edges
+            .iter()
+            .map(|&(a, b)| a.abs_diff(b) as usize)
+            .max()
+            .unwrap_or(0);
         Self {
             offsets: deg,
             neighbours,

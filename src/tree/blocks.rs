@@ -74,6 +74,9 @@ use rayon::prelude::*;
 use std::cmp::Ordering;
 use std::time::{Duration, Instant};
 
+/// The join and split trees, each with the time it took.
+pub type SweptTrees = ((JoinTree, Duration), (SplitTree, Duration));
+
 /// Cuts of the ids `0..n` into `blocks` blocks of nearly equal size:
 /// `blocks + 1` ids from 0 to n (fewer blocks if there are fewer ids).
 pub fn even_cuts(n: usize, blocks: usize) -> Vec<u32> {
@@ -106,7 +109,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     cuts: &[u32],
     progress: &Progress,
-) -> Result<((JoinTree, Duration), (SplitTree, Duration)), Cancelled> {
+) -> Result<SweptTrees, Cancelled> {
     let n = mesh.num_vertices();
     assert!(
         cuts.first() == Some(&0)
@@ -118,13 +121,17 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         let (join, split) = rayon::join(
             || {
                 let t = Instant::now();
-                sweep::whole(mesh, values, link_codes, candidates, true, order, progress, true)
-                    .map(|s| (JoinTree(s), t.elapsed()))
+                sweep::whole(
+                    mesh, values, link_codes, candidates, true, order, progress, true,
+                )
+                .map(|s| (JoinTree(s), t.elapsed()))
             },
             || {
                 let t = Instant::now();
-                sweep::whole(mesh, values, link_codes, candidates, false, order, progress, false)
-                    .map(|s| (SplitTree(s), t.elapsed()))
+                sweep::whole(
+                    mesh, values, link_codes, candidates, false, order, progress, false,
+                )
+                .map(|s| (SplitTree(s), t.elapsed()))
             },
         );
         return Ok((join?, split?));
@@ -333,14 +340,19 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
         for &g in visit {
             let v = self.node_vertex[g as usize];
             reps.clear();
-            reps.extend_from_slice(&child[first[g as usize] as usize..first[g as usize + 1] as usize]);
+            reps.extend_from_slice(
+                &child[first[g as usize] as usize..first[g as usize + 1] as usize],
+            );
             let b = self.block_of(v);
             let block = self.blocks[b];
             if block.in_band(v) {
                 self.mesh.for_each_neighbour(v, |w| {
                     if !block.contains(w) && self.before(join, w, v) {
                         let bw = self.block_of(w);
-                        debug_assert!(words[w as usize] & CANDIDATE != 0, "a band vertex is a node");
+                        debug_assert!(
+                            words[w as usize] & CANDIDATE != 0,
+                            "a band vertex is a node"
+                        );
                         reps.push(self.offset[bw] + (words[w as usize] & !CANDIDATE));
                     }
                 });
@@ -383,7 +395,10 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
             } else {
                 // One component beyond a vertex that is not a candidate:
                 // it is regular in the whole tree, and contracted away.
-                debug_assert_eq!(merged, 1, "a band vertex that is not a candidate joins one component");
+                debug_assert_eq!(
+                    merged, 1,
+                    "a band vertex that is not a candidate joins one component"
+                );
                 if joined != NONE {
                     lowest[g as usize] = lowest[joined as usize];
                 }
@@ -409,25 +424,27 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
             let (mine, tail) = rest.split_at_mut((block.hi - block.lo) as usize);
             rest = tail;
             let base = self.offset[b];
-            mine.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
-                let first = block.lo + (c * CHUNK) as u32;
-                for (i, w) in chunk.iter_mut().enumerate() {
-                    if *w & CANDIDATE != 0 {
-                        *w = glued.word[(base + (*w & !CANDIDATE)) as usize];
-                        continue;
-                    }
-                    let v = first + i as u32;
-                    let mut x = base + *w;
-                    loop {
-                        let p = glued.node_parent[x as usize];
-                        if p == NONE || !self.before(join, self.node_vertex[p as usize], v) {
-                            break;
+            mine.par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(c, chunk)| {
+                    let first = block.lo + (c * CHUNK) as u32;
+                    for (i, w) in chunk.iter_mut().enumerate() {
+                        if *w & CANDIDATE != 0 {
+                            *w = glued.word[(base + (*w & !CANDIDATE)) as usize];
+                            continue;
                         }
-                        x = p;
+                        let v = first + i as u32;
+                        let mut x = base + *w;
+                        loop {
+                            let p = glued.node_parent[x as usize];
+                            if p == NONE || !self.before(join, self.node_vertex[p as usize], v) {
+                                break;
+                            }
+                            x = p;
+                        }
+                        *w = glued.lowest[x as usize];
                     }
-                    *w = glued.lowest[x as usize];
-                }
-            });
+                });
         }
     }
 }

@@ -215,9 +215,8 @@ impl ContourTree {
         let codes = sweep::link_codes(mesh, values);
         let candidates = sweep::count_candidates(&codes);
         times.links = t.elapsed();
-        let ((mut join, tj), (mut split, ts)) = blocks::sweep_trees(
-            mesh, values, &codes, candidates, order, cuts, progress,
-        )?;
+        let ((mut join, tj), (mut split, ts)) =
+            blocks::sweep_trees(mesh, values, &codes, candidates, order, cuts, progress)?;
         drop(codes);
         progress.check(0, 1)?;
         times.join = tj;

@@ -47,7 +47,7 @@ pub const CANDIDATE: u32 = 1 << 31;
 
 /// A sweep tree on the candidate nodes: what the join and split trees have
 /// in common.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SweepTree {
     /// Per candidate: its parent candidate (towards the global minimum in
     /// the join tree, the global maximum in the split tree); `NONE` at the
@@ -67,12 +67,12 @@ pub struct SweepTree {
 
 /// The join tree (Carr et al. Def. 4.1): how the components of the
 /// superlevel sets join as the level goes down, on the candidate nodes.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct JoinTree(pub SweepTree);
 
 /// The split tree: how the components of the sublevel sets split as the
 /// level goes down (join as it goes up), on the candidate nodes.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SplitTree(pub SweepTree);
 
 /// True when a vertex with this [`Mesh::link_code`] is a candidate node:
@@ -103,7 +103,10 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<JoinTree, Cancelled> {
-    whole(mesh, values, link_codes, candidates, true, order, progress, true).map(JoinTree)
+    whole(
+        mesh, values, link_codes, candidates, true, order, progress, true,
+    )
+    .map(JoinTree)
 }
 
 /// The split tree: sweeps `order` (ascending) from its start.
@@ -115,7 +118,10 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<SplitTree, Cancelled> {
-    whole(mesh, values, link_codes, candidates, false, order, progress, true).map(SplitTree)
+    whole(
+        mesh, values, link_codes, candidates, false, order, progress, true,
+    )
+    .map(SplitTree)
 }
 
 /// One sweep over the whole mesh: one block, whose nodes are the candidates.
@@ -208,7 +214,10 @@ impl Block {
     /// The nodes of the block's trees: its candidates and its band.
     pub fn count_nodes(&self, link_codes: &[u8]) -> usize {
         let (lo, hi) = (self.lo as usize, self.hi as usize);
-        let (ilo, ihi) = (self.inner_lo as usize, self.inner_hi.max(self.inner_lo) as usize);
+        let (ilo, ihi) = (
+            self.inner_lo as usize,
+            self.inner_hi.max(self.inner_lo) as usize,
+        );
         let band = (ilo - lo) + (hi - ihi);
         band + count_candidates(&link_codes[ilo..ihi])
     }
@@ -343,7 +352,13 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             // One representative per component of the swept part of v's
             // link (inside the block).
             reps.clear();
-            let swept = |u: u32| if join { values.above(u, v) } else { values.above(v, u) };
+            let swept = |u: u32| {
+                if join {
+                    values.above(u, v)
+                } else {
+                    values.above(v, u)
+                }
+            };
             if band {
                 mesh.for_each_neighbour(v, |u| {
                     if block.contains(u) && swept(u) {
