@@ -37,10 +37,13 @@
 //! **3. Every other vertex**, in parallel in id order: its block gave it
 //! `x`, the last node of its component in the block when it was swept. In
 //! the glued tree its component at that moment is the subtree of the last
-//! ancestor `y` of `x` still swept before it (a short walk: only nodes of
-//! other blocks that joined in between lie on it), and its leafward
-//! candidate is the lowest candidate of that subtree, kept per node by the
-//! glue.
+//! ancestor `y` of `x` still swept before it, and its leafward candidate is
+//! the lowest candidate of that subtree, kept per node by the glue. The
+//! path from `x` to `y` crosses the bands of every block the component
+//! reaches, but only its candidates matter: the band vertices on it are
+//! contracted, so the answer is the lowest candidate below `x` unless a
+//! candidate ancestor is swept before the vertex; the search climbs from
+//! candidate to candidate (no climb at all for most vertices).
 //!
 //! The result is the [`JoinTree`] and [`SplitTree`] of the whole sweep,
 //! word for word (the tests compare them), so merge and augmentation do not
@@ -253,9 +256,11 @@ struct Glued {
     children: Vec<u8>,
     /// The candidates' vertices, ascending (split direction only).
     vertex: Vec<u32>,
-    /// Per node: the node that absorbed its component while it was the
-    /// component's last node (its parent in the glued tree on the nodes).
-    node_parent: Vec<u32>,
+    /// Per node: its nearest candidate ancestor in the glued tree (the
+    /// tree of the nodes: a node's parent absorbed its component while it
+    /// was the component's last node) and that candidate's vertex; `NONE`
+    /// if it has none.
+    below: Vec<[u32; 2]>,
     /// Per node: the lowest candidate of its subtree (join) / highest
     /// (split), by number.
     lowest: Vec<u32>,
@@ -406,11 +411,30 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
             }
         }
         debug_assert_eq!(next, if join { 0 } else { self.candidates as u32 });
+        // Each node's nearest candidate ancestor (and its vertex), root
+        // first: step 3 climbs from candidate to candidate.
+        let mut below = vec![[NONE; 2]; k];
+        let root_first: Box<dyn Iterator<Item = &u32>> = if join {
+            Box::new(self.by_order.iter())
+        } else {
+            Box::new(self.by_order.iter().rev())
+        };
+        for &g in root_first {
+            let p = node_parent[g as usize];
+            if p != NONE {
+                below[g as usize] = if word[p as usize] & CANDIDATE != 0 {
+                    [p, self.node_vertex[p as usize]]
+                } else {
+                    below[p as usize]
+                };
+            }
+        }
+        drop(node_parent);
         Glued {
             parent,
             children,
             vertex,
-            node_parent,
+            below,
             lowest,
             word,
         }
@@ -434,13 +458,19 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
                             continue;
                         }
                         let v = first + i as u32;
+                        // The last ancestor y of x swept before v: no candidate
+                        // lies between x and y unless the nearest candidate
+                        // ancestor of x is swept before v too, and then the
+                        // search goes on from there. Below x, up to a
+                        // candidate, every node is a contracted band vertex
+                        // of one child, so y's lowest candidate is x's.
                         let mut x = base + *w;
                         loop {
-                            let p = glued.node_parent[x as usize];
-                            if p == NONE || !self.before(join, self.node_vertex[p as usize], v) {
+                            let [c, cv] = glued.below[x as usize];
+                            if c == NONE || !self.before(join, cv, v) {
                                 break;
                             }
-                            x = p;
+                            x = c;
                         }
                         *w = glued.lowest[x as usize];
                     }

@@ -8,7 +8,10 @@
 //! candidates (Fig. 9) -> every other vertex placed on its superarc from
 //! its two leafward candidates in one parallel pass -> regular vertices of
 //! each superarc in value order. [`merge`] explains the placement rule and
-//! why it replaced the per-vertex merge (kept as the tests' oracle).
+//! why it replaced the per-vertex merge (kept as the tests' oracle). On more
+//! than two cores the sweeps run in blocks of the volume, both directions
+//! of every block at once, glued into the same two trees ([`blocks`]: the
+//! divide and conquer of Pascucci and Cole-McLaughlin).
 //!
 //! **Memory per vertex** (n vertices, beyond the field's own values): 13
 //! bytes at the peak, during the sweeps (order 4, link codes 1, and each

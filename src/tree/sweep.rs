@@ -278,6 +278,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     // The block's vertices in sweep order, a chunk of the order at a time.
     const CHUNK: usize = 1 << 16;
     let mut visit: Vec<u32> = Vec::with_capacity(CHUNK);
+
     // How far ahead in the order to prefetch: enough vertices in flight to
     // hide DRAM latency, few enough that the lines are still in L1/L2.
     const AHEAD: usize = 12;
@@ -290,22 +291,20 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             }
         }
         let end = (start + CHUNK).min(n);
-        visit.clear();
+        // Without a branch per vertex: in a block, whether the next vertex
+        // of the order is ours is a coin toss for the branch predictor.
+        visit.resize(CHUNK, 0);
+        let mut len = 0;
+        let mut keep = |v: u32| {
+            visit[len] = v;
+            len += (whole || block.contains(v)) as usize;
+        };
         if join {
-            let part = &order[n - end..n - start];
-            if whole {
-                visit.extend(part.iter().rev());
-            } else {
-                visit.extend(part.iter().rev().filter(|&&v| block.contains(v)));
-            }
+            order[n - end..n - start].iter().rev().for_each(|&v| keep(v));
         } else {
-            let part = &order[start..end];
-            if whole {
-                visit.extend_from_slice(part);
-            } else {
-                visit.extend(part.iter().filter(|&&v| block.contains(v)));
-            }
+            order[start..end].iter().for_each(|&v| keep(v));
         }
+        let visit = &visit[..len];
         for (i, &v) in visit.iter().enumerate() {
             if let Some(&w) = visit.get(i + AHEAD) {
                 // A vertex that is not a node reads one neighbour's word
