@@ -210,20 +210,51 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         }
     });
     progress.check(0, 1)?;
+    // The mesh edges across the cuts, from each band in id order: (node,
+    // neighbour node) with the neighbour above (join) or below (split).
+    let block_of = |v: u32| blocks.partition_point(|b| b.hi <= v);
+    let (join_crossing, split_crossing): (Vec<_>, Vec<_>) = blocks
+        .par_iter()
+        .map(|block| {
+            let (mut above, mut below) = (Vec::new(), Vec::new());
+            let node = |w: u32| offset[block_of(w)] + (split_words[w as usize] & !CANDIDATE);
+            for u in block.band() {
+                let gu = node(u);
+                mesh.for_each_neighbour(u, |w| {
+                    if !block.contains(w) {
+                        debug_assert!(
+                            split_words[w as usize] & CANDIDATE != 0,
+                            "a band vertex is a node"
+                        );
+                        if values.above(w, u) {
+                            above.push((gu, node(w)));
+                        } else {
+                            below.push((gu, node(w)));
+                        }
+                    }
+                });
+            }
+            (above, below)
+        })
+        .unzip();
+    let candidate: Vec<bool> = node_vertex
+        .par_iter()
+        .map(|&v| is_candidate(link_codes[v as usize]))
+        .collect();
     let gluing = Gluing {
-        mesh,
         values,
-        link_codes,
         candidates,
         blocks: &blocks,
         offset: &offset,
         node_vertex: &node_vertex,
+        candidate: &candidate,
         by_order: &by_order,
     };
     let (join_glue, split_glue) = rayon::join(
-        || gluing.glue(true, join_trees, &join_words),
-        || gluing.glue(false, split_trees, &split_words),
+        || gluing.glue(true, join_trees, &join_crossing),
+        || gluing.glue(false, split_trees, &split_crossing),
     );
+    drop((join_crossing, split_crossing));
     drop(trees);
     progress.check(0, 1)?;
 
@@ -269,25 +300,20 @@ struct Glued {
 }
 
 /// What both glues read.
-struct Gluing<'a, M, O: ?Sized> {
-    mesh: &'a M,
+struct Gluing<'a, O: ?Sized> {
     values: &'a O,
-    link_codes: &'a [u8],
     candidates: usize,
     blocks: &'a [Block],
     /// Node `offset[b] + i` is node `i` of block `b`.
     offset: &'a [u32],
     node_vertex: &'a [u32],
+    /// Per node: whether it is a candidate.
+    candidate: &'a [bool],
     /// All nodes, ascending in the vertex order.
     by_order: &'a [u32],
 }
 
-impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
-    /// The block holding vertex `v`.
-    fn block_of(&self, v: u32) -> usize {
-        self.blocks.partition_point(|b| b.hi <= v)
-    }
-
+impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
     /// True if `u` is swept before `v` in this direction.
     fn before(&self, join: bool, u: u32, v: u32) -> bool {
         if join {
@@ -298,32 +324,33 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
     }
 
     /// The sweep over all nodes: block tree edges and the mesh edges that
-    /// cross a cut (`words` names each band vertex's node in its block).
-    fn glue(&self, join: bool, trees: &[BlockTree], words: &[u32]) -> Glued {
+    /// cross a cut (`crossing[b]`: (node, neighbour swept before it) for
+    /// the band of block `b`).
+    fn glue(&self, join: bool, trees: &[BlockTree], crossing: &[Vec<(u32, u32)>]) -> Glued {
         let k = self.node_vertex.len();
-        // Children of every node in the block trees (the edges to nodes
-        // swept before it).
+        // Per node, the nodes it is joined to and that are swept before it:
+        // its children in its block's tree, its neighbours across a cut.
+        let tree_edges = trees.iter().enumerate().flat_map(|(b, t)| {
+            let base = self.offset[b];
+            t.parent
+                .iter()
+                .enumerate()
+                .filter(|&(_, &p)| p != NONE)
+                .map(move |(c, &p)| (base + p, base + c as u32))
+        });
+        let edges = || tree_edges.clone().chain(crossing.iter().flatten().copied());
         let mut first = vec![0u32; k + 1];
-        for (b, t) in trees.iter().enumerate() {
-            for &p in &t.parent {
-                if p != NONE {
-                    first[(self.offset[b] + p) as usize + 1] += 1;
-                }
-            }
+        for (g, _) in edges() {
+            first[g as usize + 1] += 1;
         }
         for i in 0..k {
             first[i + 1] += first[i];
         }
         let mut fill = first.clone();
-        let mut child = vec![0u32; first[k] as usize];
-        for (b, t) in trees.iter().enumerate() {
-            for (c, &p) in t.parent.iter().enumerate() {
-                if p != NONE {
-                    let p = (self.offset[b] + p) as usize;
-                    child[fill[p] as usize] = self.offset[b] + c as u32;
-                    fill[p] += 1;
-                }
-            }
+        let mut before = vec![0u32; first[k] as usize];
+        for (g, x) in edges() {
+            before[fill[g as usize] as usize] = x;
+            fill[g as usize] += 1;
         }
         drop(fill);
 
@@ -336,33 +363,14 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
         let mut children = vec![0u8; self.candidates];
         let mut vertex = Vec::with_capacity(if join { 0 } else { self.candidates });
         let mut next: u32 = if join { self.candidates as u32 } else { 0 };
-        let mut reps: Vec<u32> = Vec::with_capacity(16);
         let visit: Box<dyn Iterator<Item = &u32>> = if join {
             Box::new(self.by_order.iter().rev())
         } else {
             Box::new(self.by_order.iter())
         };
         for &g in visit {
-            let v = self.node_vertex[g as usize];
-            reps.clear();
-            reps.extend_from_slice(
-                &child[first[g as usize] as usize..first[g as usize + 1] as usize],
-            );
-            let b = self.block_of(v);
-            let block = self.blocks[b];
-            if block.in_band(v) {
-                self.mesh.for_each_neighbour(v, |w| {
-                    if !block.contains(w) && self.before(join, w, v) {
-                        let bw = self.block_of(w);
-                        debug_assert!(
-                            words[w as usize] & CANDIDATE != 0,
-                            "a band vertex is a node"
-                        );
-                        reps.push(self.offset[bw] + (words[w as usize] & !CANDIDATE));
-                    }
-                });
-            }
-            let candidate = is_candidate(self.link_codes[v as usize]);
+            let reps = &before[first[g as usize] as usize..first[g as usize + 1] as usize];
+            let candidate = self.candidate[g as usize];
             let kid = if !candidate {
                 NONE
             } else if join {
@@ -376,7 +384,7 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
             let mut root = g;
             let mut merged = 0u8;
             let mut joined = NONE;
-            for &x in &reps {
+            for &x in reps {
                 let r = find(&mut uf, x);
                 if r == root {
                     continue;
@@ -395,7 +403,7 @@ impl<M: Mesh, O: VertexOrder + ?Sized> Gluing<'_, M, O> {
                 word[g as usize] = CANDIDATE | kid;
                 children[kid as usize] = merged;
                 if !join {
-                    vertex.push(v);
+                    vertex.push(self.node_vertex[g as usize]);
                 }
             } else {
                 // One component beyond a vertex that is not a candidate:

@@ -211,6 +211,13 @@ impl Block {
         v < self.inner_lo || v >= self.inner_hi
     }
 
+    /// The band's vertices, ascending.
+    pub fn band(&self) -> impl Iterator<Item = u32> {
+        // If the block is thinner than two spans, inner_hi < inner_lo and
+        // the two ranges meet at inner_lo.
+        (self.lo..self.inner_lo).chain(self.inner_hi.max(self.inner_lo)..self.hi)
+    }
+
     /// The nodes of the block's trees: its candidates and its band.
     pub fn count_nodes(&self, link_codes: &[u8]) -> usize {
         let (lo, hi) = (self.lo as usize, self.hi as usize);
@@ -300,7 +307,10 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             len += (whole || block.contains(v)) as usize;
         };
         if join {
-            order[n - end..n - start].iter().rev().for_each(|&v| keep(v));
+            order[n - end..n - start]
+                .iter()
+                .rev()
+                .for_each(|&v| keep(v));
         } else {
             order[start..end].iter().for_each(|&v| keep(v));
         }
