@@ -172,7 +172,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             if progress.is_cancelled() {
                 return Err(Cancelled);
             }
-            let tree = sweep::sweep(
+            let tree = sweep::sweep::<M, O, true>(
                 mesh,
                 values,
                 link_codes,

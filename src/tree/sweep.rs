@@ -140,7 +140,7 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     let n = mesh.num_vertices();
     let mut leafward = vec![NONE; n];
     let block = Block::new(0, n as u32, n, 0);
-    let swept = sweep(
+    let swept = sweep::<M, O, false>(
         mesh,
         values,
         link_codes,
@@ -255,7 +255,7 @@ pub(super) struct BlockTree {
 /// never a union-find node: it costs one read of a neighbour's word, a
 /// `find` in the (on smooth fields, cache-sized) node forest and one write.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
+pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     mesh: &M,
     values: &O,
     link_codes: &[u8],
@@ -271,7 +271,9 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     let n = order.len();
     let lo = block.lo;
     debug_assert_eq!(leafward.len(), (block.hi - lo) as usize);
-    let whole = lo == 0 && block.hi as usize == n;
+    // Without BLOCKED, the block is the whole mesh and has no band (one
+    // compiled loop each, so the whole sweep pays nothing for blocks).
+    debug_assert!(BLOCKED || (lo == 0 && block.hi as usize == n));
     // uf[c]: ROOT | last node of the component at a root, otherwise the
     // parent in the union-find forest.
     let mut uf = vec![NONE; nodes];
@@ -298,44 +300,56 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             }
         }
         let end = (start + CHUNK).min(n);
-        // Without a branch per vertex: in a block, whether the next vertex
-        // of the order is ours is a coin toss for the branch predictor.
-        visit.resize(CHUNK, 0);
-        let mut len = 0;
-        let mut keep = |v: u32| {
-            visit[len] = v;
-            len += (whole || block.contains(v)) as usize;
-        };
-        if join {
-            order[n - end..n - start]
-                .iter()
-                .rev()
-                .for_each(|&v| keep(v));
+        let part = if join {
+            &order[n - end..n - start]
         } else {
-            order[start..end].iter().for_each(|&v| keep(v));
-        }
-        let visit = &visit[..len];
-        for (i, &v) in visit.iter().enumerate() {
-            if let Some(&w) = visit.get(i + AHEAD) {
+            &order[start..end]
+        };
+        // The vertices to visit, `seq` read backwards if `rev`: the order
+        // itself for the whole mesh, else the block's vertices of it,
+        // filtered without a branch per vertex (whether the next vertex of
+        // the order is in the block is a coin toss for the predictor).
+        let (seq, rev) = if !BLOCKED {
+            (part, join)
+        } else {
+            visit.resize(CHUNK, 0);
+            let mut len = 0;
+            let mut keep = |v: u32| {
+                visit[len] = v;
+                len += block.contains(v) as usize;
+            };
+            if join {
+                part.iter().rev().for_each(|&v| keep(v));
+            } else {
+                part.iter().for_each(|&v| keep(v));
+            }
+            (&visit[..len], false)
+        };
+        let m = seq.len();
+        let at = |i: usize| if rev { seq[m - 1 - i] } else { seq[i] };
+        for i in 0..m {
+            let v = at(i);
+            if i + AHEAD < m {
                 // A vertex that is not a node reads one neighbour's word
                 // and writes its own: two lines, not its whole star. Its
                 // code was prefetched AHEAD vertices ago. (Indices are
                 // relative to the block: the hints only add offsets.)
+                let w = at(i + AHEAD);
                 let cw = link_codes[w as usize];
-                if is_candidate(cw) || block.in_band(w) {
+                if is_candidate(cw) || (BLOCKED && block.in_band(w)) {
                     mesh.prefetch_star(w - lo, leafward);
                 } else {
                     let c = if join { cw & 0xf } else { cw >> 4 };
                     prefetch(leafward, (mesh.neighbour_at(w, c) - lo) as usize);
                     prefetch(leafward, (w - lo) as usize);
                 }
-                if let Some(&w2) = visit.get(i + 2 * AHEAD) {
-                    prefetch(link_codes, w2 as usize);
+                if i + 2 * AHEAD < m {
+                    prefetch(link_codes, at(i + 2 * AHEAD) as usize);
                 }
             }
             let full = link_codes[v as usize];
             let code = if join { full & 0xf } else { full >> 4 };
-            let band = block.in_band(v);
+            let band = BLOCKED && block.in_band(v);
             if !band && !is_candidate(full) {
                 // One component beyond v, reached through one neighbour: v
                 // remembers its last node. Nothing else.
