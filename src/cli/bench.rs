@@ -161,7 +161,8 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
         let base = current_rss();
         let (tree, times) = match ContourTree::from_field(field, &Progress::new()) {
             Ok(t) => t,
-            Err(_) => unreachable!("nobody cancels a benchmark"),
+            // Nobody cancels a benchmark; a volume too large stops it.
+            Err(e) => panic!("{name}: {e}"),
         };
         let peak = peak_rss();
         let (collapsed, simplification, level_change) = simplification_times(&tree, field);

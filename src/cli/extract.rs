@@ -142,8 +142,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
 
     let t = Instant::now();
-    let (tree, _) = ContourTree::from_field(field, bar.progress())
-        .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
+    let (tree, _) =
+        ContourTree::from_field(field, bar.progress()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let arcs = match args.simplify {
         Some(n) => Arcs::Simplified(n, args.measure),
         None => Arcs::Superarcs,

@@ -148,8 +148,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &volume.warnings {
         r.warn(w);
     }
-    let (tree, _) = ContourTree::from_field(field, bar.progress())
-        .map_err(|_| anyhow::anyhow!("contour tree construction was cancelled"))?;
+    let (tree, _) =
+        ContourTree::from_field(field, bar.progress()).map_err(|e| anyhow::anyhow!("{e}"))?;
     bar.done();
 
     let (lo, hi) = field.range();

@@ -83,14 +83,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let load = t.elapsed();
     let field = &volume.field;
-    let cancelled = |_| anyhow::anyhow!("cancelled");
+    let cancelled = |_: crate::progress::Cancelled| anyhow::anyhow!("cancelled");
     let (tree, timing) = match args.algorithm {
         Algorithm::CarrSnoeyinkAxen => {
             let (tree, times) = match args.blocks {
                 Some(b) => ContourTree::from_field_in_blocks(field, b as usize, bar.progress()),
                 None => ContourTree::from_field(field, bar.progress()),
             }
-            .map_err(cancelled)?;
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
             (tree, Timing::Engine(times))
         }
         Algorithm::RaichelSeshadhri => {
@@ -302,7 +302,7 @@ fn print_comparisons(
     match algorithm {
         Algorithm::CarrSnoeyinkAxen => {
             let (_, c) = raichel_seshadhri::count::engine_comparisons(field, &Progress::new())
-                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             report!(
                 r,
                 "comparisons (M): sort {:.3} ({})  links and sweeps {:.3}  total {:.3} = {:.2} per vertex; a comparison sort: n log2 n = {:.3}",

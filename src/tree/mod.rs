@@ -152,12 +152,73 @@ impl BuildTimes {
     }
 }
 
+/// Why the tree was not built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum BuildError {
+    /// The user (or a newer job) cancelled it.
+    #[error("cancelled")]
+    Cancelled,
+    /// The engine's arrays would not fit in the memory left.
+    #[error(
+        "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
+         ({candidates} candidate nodes, {}% of the vertices: each costs about 40 bytes at the merge), \
+         but only {} MiB are left",
+        needed >> 20,
+        (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
+        available >> 20
+    )]
+    OutOfMemory {
+        /// Vertices of the mesh.
+        vertices: usize,
+        /// Its candidate nodes (§4.4), known once the links are classified.
+        candidates: usize,
+        /// Peak bytes of the engine beyond the values ([`peak_bytes`]).
+        needed: u64,
+        /// Bytes available when the check ran, plus what the engine already
+        /// held then (vertex order and link codes).
+        available: u64,
+    },
+}
+
+impl From<Cancelled> for BuildError {
+    fn from(_: Cancelled) -> Self {
+        BuildError::Cancelled
+    }
+}
+
+/// Peak bytes the engine holds beyond the values for `n` vertices of
+/// which `candidates` are candidate nodes (the module doc's account): 13
+/// per vertex and 24 per candidate while sweeping, 12 per vertex and about
+/// 40 per candidate at the merge.
+pub fn peak_bytes(n: usize, candidates: usize) -> u64 {
+    let (n, k) = (n as u64, candidates as u64);
+    (13 * n + 24 * k).max(12 * n + 40 * k)
+}
+
+/// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
+/// once the vertex order and link codes (5 bytes per vertex, already held)
+/// are counted back in: a clear error instead of an allocation failure
+/// halfway through, on volumes that are large *and* noisy.
+pub fn check_memory(n: usize, candidates: usize, available: u64) -> Result<(), BuildError> {
+    let needed = peak_bytes(n, candidates);
+    let available = available.saturating_add(5 * n as u64);
+    if needed > available {
+        return Err(BuildError::OutOfMemory {
+            vertices: n,
+            candidates,
+            needed,
+            available,
+        });
+    }
+    Ok(())
+}
+
 impl ContourTree {
     /// Builds the tree of a grid field on its Freudenthal triangulation.
     pub fn from_field(
         field: &ScalarField,
         progress: &Progress,
-    ) -> Result<(Self, BuildTimes), Cancelled> {
+    ) -> Result<(Self, BuildTimes), BuildError> {
         let blocks = blocks::default_blocks(field.len(), field.mesh().edge_span());
         Self::from_field_in_blocks(field, blocks, progress)
     }
@@ -169,7 +230,7 @@ impl ContourTree {
         field: &ScalarField,
         blocks: usize,
         progress: &Progress,
-    ) -> Result<(Self, BuildTimes), Cancelled> {
+    ) -> Result<(Self, BuildTimes), BuildError> {
         let t = Instant::now();
         progress.stage("sort");
         let order = field.vertex_order();
@@ -189,7 +250,7 @@ impl ContourTree {
         values: &O,
         order: &[u32],
         progress: &Progress,
-    ) -> Result<(Self, BuildTimes), Cancelled> {
+    ) -> Result<(Self, BuildTimes), BuildError> {
         let n = mesh.num_vertices();
         let cuts = blocks::even_cuts(n, blocks::default_blocks(n, mesh.edge_span()));
         Self::build_in_blocks(mesh, values, order, &cuts, progress)
@@ -204,7 +265,7 @@ impl ContourTree {
         order: &[u32],
         cuts: &[u32],
         progress: &Progress,
-    ) -> Result<(Self, BuildTimes), Cancelled> {
+    ) -> Result<(Self, BuildTimes), BuildError> {
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
         let mut times = BuildTimes::default();
         if order.is_empty() {
@@ -218,6 +279,9 @@ impl ContourTree {
         let codes = sweep::link_codes(mesh, values);
         let candidates = sweep::count_candidates(&codes);
         times.links = t.elapsed();
+        if let Some(available) = crate::field::io::available_memory() {
+            check_memory(mesh.num_vertices(), candidates, available)?;
+        }
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, &codes, candidates, order, cuts, progress)?;
         drop(codes);
@@ -419,6 +483,36 @@ impl ContourTree {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn memory_check_follows_the_candidates() {
+        let gib = 1u64 << 30;
+        let n = 1usize << 30; // 1024^3
+        // A scan or smooth field (2 % candidates): 13.5 bytes per vertex.
+        assert!(check_memory(n, n / 50, 16 * gib).is_ok());
+        // The same volume noisy (28 % candidates) on the same machine.
+        let noisy = n * 28 / 100;
+        let e = check_memory(n, noisy, 16 * gib).unwrap_err();
+        let BuildError::OutOfMemory {
+            needed, available, ..
+        } = e
+        else {
+            panic!("refused for memory")
+        };
+        assert_eq!(needed, peak_bytes(n, noisy));
+        assert_eq!(available, 16 * gib + 5 * n as u64);
+        assert!(
+            needed > 23 * gib,
+            "the merge's 40 bytes per candidate dominate"
+        );
+        let message = e.to_string();
+        assert!(message.contains("28%"), "{message}");
+        assert!(message.contains("candidate nodes"), "{message}");
+        // Exactly at the limit is allowed, a byte more is not.
+        let peak = peak_bytes(1000, 10);
+        assert!(check_memory(1000, 10, peak - 5000).is_ok());
+        assert!(check_memory(1000, 10, peak - 5001).is_err());
+    }
     use crate::field::Values;
     use proptest::prelude::*;
 

@@ -13,7 +13,7 @@ use crate::field::ScalarField;
 use crate::field::source::VolumeSource;
 use crate::progress::Progress;
 use crate::simplify::{CollapsedTree, Measure, Simplification};
-use crate::tree::ContourTree;
+use crate::tree::{BuildError, ContourTree};
 
 use super::JobError;
 use crate::app::dataset::{Dataset, StageTimes, views};
@@ -109,7 +109,10 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
         )));
     }
     let t = Instant::now();
-    let (tree, _) = ContourTree::from_field(&field, progress).map_err(|_| JobError::Cancelled)?;
+    let (tree, _) = ContourTree::from_field(&field, progress).map_err(|e| match e {
+        BuildError::Cancelled => JobError::Cancelled,
+        e => JobError::Input(format!("{name}: {e}")),
+    })?;
     let tree_time = t.elapsed();
     if progress.is_cancelled() {
         return Err(JobError::Cancelled);

@@ -146,7 +146,7 @@ impl EngineComparisons {
 pub fn engine_comparisons(
     field: &crate::field::ScalarField,
     progress: &crate::progress::Progress,
-) -> Result<(crate::tree::ContourTree, EngineComparisons), crate::progress::Cancelled> {
+) -> Result<(crate::tree::ContourTree, EngineComparisons), crate::tree::BuildError> {
     use crate::field::Values;
     let n = field.len();
     let (sort_kind, sort) = match field.values() {
