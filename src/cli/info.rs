@@ -4,7 +4,8 @@
 //! will need.
 
 use super::input::InputArgs;
-use crate::field::io::{TREE_BYTES_PER_VERTEX, Volume};
+use crate::field::ScalarField;
+use crate::field::io::Volume;
 use crate::field::{Scalar, Values};
 use std::fmt::Write as _;
 
@@ -40,7 +41,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// What [`report`] says, as JSON: `file`, `format`, `dims`, `type`,
 /// `file_type`, `spacing`, `origin`, `direction` (per axis), `space`,
 /// `range`, `distinct` (integers), `histogram` (`edges`, `counts`),
-/// `memory_bytes`, `warnings`.
+/// `candidates` (candidate nodes of the tree engine), `memory_bytes`
+/// (values and the engine's peak), `warnings`.
 pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
     let f = &volume.field;
     let v = f.values();
@@ -53,6 +55,7 @@ pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
         .collect();
     let g = f.geometry();
     let n = f.len() as u64;
+    let (candidates, tree) = tree_memory(f);
     serde_json::json!({
         "file": volume.path.display().to_string(),
         "format": volume.format,
@@ -67,7 +70,8 @@ pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
         "range": [lo, hi],
         "distinct": distinct(v),
         "histogram": { "edges": edges, "counts": counts },
-        "memory_bytes": n * (v.bytes_per_value() as u64 + TREE_BYTES_PER_VERTEX),
+        "candidates": candidates,
+        "memory_bytes": n * v.bytes_per_value() as u64 + tree,
         "warnings": volume.warnings,
     })
 }
@@ -157,18 +161,27 @@ pub fn report(volume: &Volume, bins: usize) -> String {
         );
     }
     let values = (n * v.bytes_per_value()) as u64;
-    let tree = n as u64 * TREE_BYTES_PER_VERTEX;
+    let (candidates, tree) = tree_memory(f);
     let _ = writeln!(
         out,
-        "memory:    values {} + contour tree {} ({TREE_BYTES_PER_VERTEX} bytes per vertex while building) = about {}",
+        "memory:    values {} + contour tree {} at its peak ({candidates} candidate nodes, {:.1}% of the vertices) = about {}",
         mib(values),
         mib(tree),
+        candidates as f64 * 100.0 / n.max(1) as f64,
         mib(values + tree)
     );
     for w in &volume.warnings {
         let _ = writeln!(out, "warning:   {w}");
     }
     out
+}
+
+/// The candidate nodes of the field (its link classification, without the
+/// sort) and the peak bytes the tree engine will hold beyond the values.
+fn tree_memory(f: &ScalarField) -> (usize, u64) {
+    let mesh = f.mesh();
+    let candidates = crate::with_values!(f.values(), v => crate::tree::sweep::count_candidates_of(&mesh, v.as_slice()));
+    (candidates, crate::tree::peak_bytes(f.len(), candidates))
 }
 
 /// A bin edge: integral values without decimals, others with four.

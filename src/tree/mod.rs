@@ -19,11 +19,13 @@
 //! candidates); merge and placement hold 12 (order and the two leafward
 //! arrays, the first of which becomes `vertex_arc`), then the arcs' vertex
 //! lists take the place of the second. Candidates add 24 bytes each during
-//! the sweeps and about 40 at the merge's peak: nothing on smooth fields
-//! (a few per cent of the vertices), but on white noise, where more than
-//! half the vertices are candidates, the peak is then 30-35 bytes per
-//! vertex. The finished tree keeps 8 bytes (`vertex_arc` and
-//! `arc_vertices`) plus O(supernodes).
+//! the sweeps and about 88 at the merge's peak ([`peak_bytes`]): little on
+//! smooth fields (a few per cent of the vertices), but on noisy scans
+//! (tooth 31 %) and white noise, where half the vertices are candidates,
+//! the peak is then 30-55 bytes per vertex. [`check_memory`] refuses a
+//! build that would not fit as soon as the candidates are counted. The
+//! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
+//! O(supernodes).
 
 pub mod blocks;
 pub mod json;
@@ -161,7 +163,7 @@ pub enum BuildError {
     /// The engine's arrays would not fit in the memory left.
     #[error(
         "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
-         ({candidates} candidate nodes, {}% of the vertices: each costs about 40 bytes at the merge), \
+         ({candidates} candidate nodes, {}% of the vertices: each costs about 90 bytes at the merge), \
          but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
@@ -188,11 +190,13 @@ impl From<Cancelled> for BuildError {
 
 /// Peak bytes the engine holds beyond the values for `n` vertices of
 /// which `candidates` are candidate nodes (the module doc's account): 13
-/// per vertex and 24 per candidate while sweeping, 12 per vertex and about
-/// 40 per candidate at the merge.
+/// per vertex and 24 per candidate while sweeping, 12 per vertex and 88
+/// per candidate at the merge (its tables and the tree it builds; fitted
+/// to the peaks `flexiso bench` measures on tooth, engine, the brains and
+/// aneurism, within 5 %).
 pub fn peak_bytes(n: usize, candidates: usize) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    (13 * n + 24 * k).max(12 * n + 40 * k)
+    (13 * n + 24 * k).max(12 * n + 88 * k)
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`

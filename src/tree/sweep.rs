@@ -90,6 +90,23 @@ pub fn count_candidates(link_codes: &[u8]) -> usize {
         .sum()
 }
 
+/// The candidates of a mesh counted without keeping its link codes (64 Ki
+/// vertices at a time, on every core): what `flexiso info` needs to say
+/// how much memory the tree will take ([`super::peak_bytes`]).
+pub fn count_candidates_of<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> usize {
+    const CHUNK: usize = 1 << 16;
+    let n = mesh.num_vertices();
+    (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let first = c * CHUNK;
+            let mut codes = vec![0u8; (n - first).min(CHUNK)];
+            mesh.link_codes_into(values, first as u32, &mut codes);
+            codes.iter().filter(|&&x| is_candidate(x)).count()
+        })
+        .sum()
+}
+
 /// Marks a union-find root; the rest of a root's word is the component's
 /// last candidate.
 pub(super) const ROOT: u32 = 1 << 31;

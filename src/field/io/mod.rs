@@ -67,8 +67,10 @@ pub(crate) use self::check_volume_size as check_dims;
 /// word per vertex, then the augmented tree). The tree module owns the real
 /// figure (`crate::tree`'s module doc): 13 bytes plus about 24 per
 /// *candidate node*, which is 13 on smooth fields and most scans (aneurism
-/// measures 13.0) and more on noisy data (tooth 35, white noise 30-55);
-/// this is the number the readers and `flexiso info` quote.
+/// measures 13.0) and more on noisy data (tooth 35, white noise 30-55).
+/// The readers check this a priori figure before reading; `flexiso info`
+/// counts the candidates and quotes `crate::tree::peak_bytes`, and the
+/// engine refuses a build that would not fit once it knows them.
 pub const TREE_BYTES_PER_VERTEX: u64 = 16;
 
 /// Bytes per vertex the readers reserve for the engine when checking that a
