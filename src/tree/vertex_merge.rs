@@ -6,7 +6,7 @@
 //! slow on smooth fields (every vertex visited in value order through
 //! random memory) but simple enough to trust.
 
-use super::sweep::NONE;
+use super::sweep::{NONE, ROOT, union};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::VertexOrder;
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
@@ -34,9 +34,9 @@ pub struct VertexSweepTree {
     pub children: Vec<u8>,
 }
 
-/// Marks a union-find root; the rest of a root's word is the component's
-/// most recently added vertex (its lowest in the join sweep).
-const ROOT: u32 = 1 << 31;
+// Union-find words as in `sweep`: `ROOT | last` at a root, where `last`
+// is the component's most recently added vertex (its lowest in the join
+// sweep); `union` is the sweep's.
 
 /// Sweeps `order` (the visiting order: descending for the join tree with
 /// `join = true`, ascending for the split tree) and returns the augmented
@@ -101,25 +101,7 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             let last = uf[r as usize] & !ROOT;
             parent[last as usize] = v;
             merged += 1;
-            if root == v {
-                // v is still a singleton: hang it under r. Its rank is 0, so
-                // r's rank stays a valid bound on height without reading it.
-                uf[v as usize] = r;
-                uf[r as usize] = ROOT | v;
-                root = r;
-                continue;
-            }
-            let (hi, lo) = if rank[r as usize] > rank[root as usize] {
-                (r, root)
-            } else {
-                (root, r)
-            };
-            if rank[hi as usize] == rank[lo as usize] {
-                rank[hi as usize] += 1;
-            }
-            uf[lo as usize] = hi;
-            uf[hi as usize] = ROOT | v;
-            root = hi;
+            root = union(&mut uf, &mut rank, root, r, v);
         }
         children[v as usize] = merged;
     }
