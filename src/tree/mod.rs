@@ -496,7 +496,7 @@ mod tests {
         assert!(check_memory(n, n / 50, 16 * gib).is_ok());
         // The same volume noisy (28 % candidates) on the same machine.
         let noisy = n * 28 / 100;
-        let e = check_memory(n, noisy, 16 * gib).unwrap_err();
+        let e = check_memory(n, noisy, 16 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
