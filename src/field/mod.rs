@@ -76,6 +76,19 @@ pub trait Scalar: Copy + PartialOrd + Send + Sync + 'static {
 pub trait VertexOrder: Sync {
     /// True when vertex `a` comes after vertex `b`.
     fn above(&self, a: u32, b: u32) -> bool;
+
+    /// The order of `a` and `b` as an [`std::cmp::Ordering`], for sorts:
+    /// one comparison, equal only for the same vertex.
+    #[inline(always)]
+    fn ordering(&self, a: u32, b: u32) -> std::cmp::Ordering {
+        if a == b {
+            std::cmp::Ordering::Equal
+        } else if self.above(a, b) {
+            std::cmp::Ordering::Greater
+        } else {
+            std::cmp::Ordering::Less
+        }
+    }
 }
 
 impl<T: Scalar> VertexOrder for [T] {

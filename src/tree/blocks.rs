@@ -74,7 +74,6 @@ use crate::field::VertexOrder;
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
-use std::cmp::Ordering;
 use std::time::{Duration, Instant};
 
 /// The join and split trees, each with the time it took.
@@ -193,22 +192,15 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         .collect::<Result<_, _>>()?;
     let (join_trees, split_trees) = trees.split_at(blocks.len());
 
-    // 2. The nodes in the vertex order: the blocks' sorted lists merged.
+    // 2. The nodes in the vertex order (each block's list is sorted: the
+    // sort merges runs).
     let node_vertex: Vec<u32> = split_trees
         .iter()
         .flat_map(|t| t.vertex.iter().copied())
         .collect();
     let mut by_order: Vec<u32> = (0..node_vertex.len() as u32).collect();
-    by_order.par_sort_by(|&a, &b| {
-        let (u, v) = (node_vertex[a as usize], node_vertex[b as usize]);
-        if values.above(u, v) {
-            Ordering::Greater
-        } else if values.above(v, u) {
-            Ordering::Less
-        } else {
-            Ordering::Equal
-        }
-    });
+    by_order
+        .par_sort_by(|&a, &b| values.ordering(node_vertex[a as usize], node_vertex[b as usize]));
     progress.check(0, 1)?;
     // The mesh edges across the cuts, from each band in id order: (node,
     // neighbour node) with the neighbour above (join) or below (split).
@@ -295,8 +287,6 @@ struct Glued {
     /// Per node: the lowest candidate of its subtree (join) / highest
     /// (split), by number.
     lowest: Vec<u32>,
-    /// Per node: its final word (`CANDIDATE | number` for a candidate).
-    word: Vec<u32>,
 }
 
 /// What both glues read.
@@ -358,7 +348,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         let mut rank = vec![0u8; k];
         let mut node_parent = vec![NONE; k];
         let mut lowest = vec![NONE; k];
-        let mut word = vec![NONE; k];
         let mut parent = vec![NONE; self.candidates];
         let mut children = vec![0u8; self.candidates];
         let mut vertex = Vec::with_capacity(if join { 0 } else { self.candidates });
@@ -400,7 +389,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             }
             if candidate {
                 lowest[g as usize] = kid;
-                word[g as usize] = CANDIDATE | kid;
                 children[kid as usize] = merged;
                 if !join {
                     vertex.push(self.node_vertex[g as usize]);
@@ -415,7 +403,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 if joined != NONE {
                     lowest[g as usize] = lowest[joined as usize];
                 }
-                word[g as usize] = lowest[g as usize];
             }
         }
         debug_assert_eq!(next, if join { 0 } else { self.candidates as u32 });
@@ -430,7 +417,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         for &g in root_first {
             let p = node_parent[g as usize];
             if p != NONE {
-                below[g as usize] = if word[p as usize] & CANDIDATE != 0 {
+                below[g as usize] = if self.candidate[p as usize] {
                     [p, self.node_vertex[p as usize]]
                 } else {
                     below[p as usize]
@@ -444,7 +431,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             vertex,
             below,
             lowest,
-            word,
         }
     }
 
@@ -462,7 +448,11 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                     let first = block.lo + (c * CHUNK) as u32;
                     for (i, w) in chunk.iter_mut().enumerate() {
                         if *w & CANDIDATE != 0 {
-                            *w = glued.word[(base + (*w & !CANDIDATE)) as usize];
+                            // A node: a candidate's own number, flagged,
+                            // or the lowest candidate a band vertex joined.
+                            let g = (base + (*w & !CANDIDATE)) as usize;
+                            let c = glued.lowest[g];
+                            *w = if self.candidate[g] { CANDIDATE | c } else { c };
                             continue;
                         }
                         let v = first + i as u32;

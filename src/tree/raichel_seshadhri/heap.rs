@@ -180,13 +180,7 @@ mod tests {
             all = heaps.pop(all, order);
         }
         let mut expected: Vec<u32> = (0..n).collect();
-        expected.sort_by(|&a, &b| {
-            if order.above(a, b) {
-                std::cmp::Ordering::Less
-            } else {
-                std::cmp::Ordering::Greater
-            }
-        });
+        expected.sort_by(|&a, &b| order.ordering(b, a));
         assert_eq!(popped, expected);
     }
 

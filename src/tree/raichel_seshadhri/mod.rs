@@ -398,13 +398,8 @@ pub fn build<O: CountingOrder + ?Sized>(
     let t0 = Instant::now();
     let c0 = values.comparisons();
     let mut node_crit: Vec<u32> = (0..t as u32).filter(|&i| is_node(i as usize)).collect();
-    node_crit.par_sort_unstable_by(|&a, &b| {
-        if values.above(critical[a as usize], critical[b as usize]) {
-            std::cmp::Ordering::Greater
-        } else {
-            std::cmp::Ordering::Less
-        }
-    });
+    node_crit
+        .par_sort_unstable_by(|&a, &b| values.ordering(critical[a as usize], critical[b as usize]));
     let mut node_of = vec![NONE; t];
     let nodes: Vec<Node> = node_crit
         .iter()
@@ -581,15 +576,9 @@ pub fn build<O: CountingOrder + ?Sized>(
         slices.push(s);
         rest = r;
     }
-    slices.into_par_iter().for_each(|s| {
-        s.sort_unstable_by(|&a, &b| {
-            if values.above(a, b) {
-                std::cmp::Ordering::Greater
-            } else {
-                std::cmp::Ordering::Less
-            }
-        })
-    });
+    slices
+        .into_par_iter()
+        .for_each(|s| s.sort_unstable_by(|&a, &b| values.ordering(a, b)));
     stats.times.arc_sort = t0.elapsed();
     stats.comparisons.arc_sort = values.comparisons() - c0;
     let tree = ContourTree::assemble(nodes, arcs, place, offsets_arc, arc_vertices);
