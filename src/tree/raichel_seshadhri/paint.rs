@@ -42,8 +42,8 @@
 //! comparisons read no field values ([`super::count::CountingOrder`]).
 //!
 //! Memory: 4 bytes per vertex of paint (returned: the split tree's is kept
-//! for locating), 16 bytes per heap entry for values of up to 4 bytes, 17
-//! per colour.
+//! for locating), 8 bytes per heap entry for values of up to 4 bytes, 33
+//! per colour (its run heap's node, class root and top, union-find).
 
 use super::count::CountingOrder;
 use super::heap::{self, RunHeaps};
