@@ -143,6 +143,117 @@ impl<K: Copy> PairingHeaps<K> {
     }
 }
 
+/// Mergeable max-heaps whose entries arrive in *runs*, one per initial
+/// heap, each sorted once from its top (what the painting's T(c) are: a
+/// colour's touched vertices, all known before the first meld). A heap is a
+/// [`PairingHeaps`] of runs keyed by each run's head, not of entries:
+/// delete-max pops the top run, advances its head and melds it back (one
+/// comparison more), and meld melds the run heaps. The answers are those
+/// of one pairing heap of all entries (the top is the highest entry of the
+/// heap, ties by name); what changes is where the pointers lie: a run
+/// heap has one node per initial heap (per colour, 16 bytes each, a few
+/// hundred kilobytes on the noisy volumes) where an entry heap had one per
+/// entry, so that a pop chases pointers inside the second-level cache, and
+/// the entries themselves are read in order, run by run. (With one node
+/// per entry, tooth's painting spent most of its time in pops' sibling
+/// walks, each a cache miss.) Comparisons: sorting the runs, Σ k log2 k for
+/// runs of k entries, then per delete-max O(log r) amortised for a heap of
+/// r runs, plus one per meld; a binomial or pairing heap of entries makes
+/// O(k) to build and O(log size) per delete-max.
+pub struct RunHeaps<K> {
+    /// Every run's entries (key, name), each run sorted from its top.
+    entries: Vec<(K, u32)>,
+    /// Per run, the index of its head in `entries`, and the run's end.
+    head: Vec<u32>,
+    end: Vec<u32>,
+    /// The heaps of runs: node r is run r, keyed by its head.
+    nodes: PairingHeaps<K>,
+}
+
+impl<K: Copy + Send + Sync> RunHeaps<K> {
+    /// The heaps of `entries` (key, name), in runs `start[r]..start[r + 1]`
+    /// (in any order within a run; names distinct but for copies of one
+    /// vertex, numbered in the order of their vertices' ids): each run is
+    /// sorted from its top, on all cores.
+    pub fn new<O: CountingOrder<Key = K> + ?Sized>(
+        mut entries: Vec<(K, u32)>,
+        start: &[u32],
+        order: &O,
+    ) -> Self {
+        use rayon::prelude::*;
+        let runs = start.len().saturating_sub(1);
+        let mut slices: Vec<&mut [(K, u32)]> = Vec::with_capacity(runs);
+        let mut rest = entries.as_mut_slice();
+        for r in 0..runs {
+            let (s, tail) = rest.split_at_mut((start[r + 1] - start[r]) as usize);
+            slices.push(s);
+            rest = tail;
+        }
+        slices.into_par_iter().for_each(|s| {
+            s.sort_unstable_by(|a, b| {
+                if a.1 == b.1 {
+                    std::cmp::Ordering::Equal
+                } else if order.above_keys(a.0, a.1, b.0, b.1) {
+                    std::cmp::Ordering::Less
+                } else {
+                    std::cmp::Ordering::Greater
+                }
+            })
+        });
+        let blank = entries.first().map(|e| e.0);
+        let mut nodes = match blank {
+            Some(b) => PairingHeaps::with_len(runs, b),
+            None => PairingHeaps::with_capacity(0),
+        };
+        for r in 0..runs {
+            if start[r] < start[r + 1] {
+                let (k, item) = entries[start[r] as usize];
+                nodes.set(r as u32, k, item);
+            }
+        }
+        Self {
+            entries,
+            head: start[..runs].to_vec(),
+            end: start[1..].to_vec(),
+            nodes,
+        }
+    }
+
+    /// The heap of run `r` alone (`NONE` when the run is empty).
+    pub fn run(&self, r: u32) -> u32 {
+        if self.head[r as usize] < self.end[r as usize] {
+            r
+        } else {
+            NONE
+        }
+    }
+
+    /// The name of a heap's highest entry, or `None` when empty.
+    #[inline]
+    pub fn top(&self, heap: u32) -> Option<u32> {
+        self.nodes.top(heap)
+    }
+
+    /// Melds two heaps (one comparison).
+    #[inline]
+    pub fn meld<O: CountingOrder<Key = K> + ?Sized>(&mut self, a: u32, b: u32, order: &O) -> u32 {
+        self.nodes.meld(a, b, order)
+    }
+
+    /// Deletes a heap's highest entry and returns the heap.
+    pub fn pop<O: CountingOrder<Key = K> + ?Sized>(&mut self, heap: u32, order: &O) -> u32 {
+        let r = heap as usize;
+        let rest = self.nodes.pop(heap, order);
+        self.head[r] += 1;
+        if self.head[r] == self.end[r] {
+            return rest;
+        }
+        let (k, item) = self.entries[self.head[r] as usize];
+        self.nodes.set(heap, k, item);
+        self.nodes.meld(rest, heap, order)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,7 +330,72 @@ mod tests {
         assert_pops_in_order(&mut heaps, all, order, n);
     }
 
+    /// The same vertices in runs (one per heap, ids shuffled within a
+    /// run), melded into one run heap in `k` steps, popped: the order's
+    /// descending order, ties by id. Halfway, the popped vertices are
+    /// checked against a plain sort of what the melded heaps hold.
+    fn runs_pop_in_order<O: CountingOrder + ?Sized>(order: &O, n: u32, heap_of: &[u32], k: u32) {
+        let mut start = vec![0u32; k as usize + 1];
+        for &h in heap_of {
+            start[h as usize + 1] += 1;
+        }
+        for h in 0..k as usize {
+            start[h + 1] += start[h];
+        }
+        let mut fill = start.clone();
+        let mut entries = vec![(order.key(0), 0u32); n as usize];
+        // Reversed within each run, so that the sort has work to do.
+        for v in (0..n).rev() {
+            let h = heap_of[v as usize] as usize;
+            entries[fill[h] as usize] = (order.key(v), v);
+            fill[h] += 1;
+        }
+        let mut heaps = RunHeaps::new(entries, &start, order);
+        // Pop the first heap for a while alone: its own descending order.
+        let mut first = heaps.run(0);
+        let mut own: Vec<u32> = (0..n).filter(|&v| heap_of[v as usize] == 0).collect();
+        own.sort_by(|&a, &b| order.ordering(b, a));
+        let half = own.len() / 2;
+        for &v in &own[..half] {
+            assert_eq!(heaps.top(first), Some(v));
+            first = heaps.pop(first, order);
+        }
+        let mut all = first;
+        for h in 1..k {
+            let r = heaps.run(h);
+            all = heaps.meld(all, r, order);
+        }
+        let mut popped = own[..half].to_vec();
+        while let Some(v) = heaps.top(all) {
+            popped.push(v);
+            all = heaps.pop(all, order);
+        }
+        let mut rest: Vec<u32> = popped[half..].to_vec();
+        let mut expected: Vec<u32> = (0..n).filter(|v| !own[..half].contains(v)).collect();
+        expected.sort_by(|&a, &b| order.ordering(b, a));
+        rest.truncate(expected.len());
+        assert_eq!(rest, expected);
+        assert_eq!(popped.len(), n as usize);
+    }
+
     proptest! {
+        #[test]
+        fn run_heaps_pop_in_order_by_their_keys(
+            (values, heap_of, k) in (1usize..300, 1u32..12).prop_flat_map(|(n, k)| (
+                proptest::collection::vec(0u8..6, n),
+                proptest::collection::vec(0..k, n),
+                Just(k),
+            ))
+        ) {
+            let n = values.len() as u32;
+            let plain = values.as_slice();
+            runs_pop_in_order(plain, n, &heap_of, k);
+            runs_pop_in_order(&Inverted(plain), n, &heap_of, k);
+            let counted = Counted::new(plain);
+            runs_pop_in_order(&counted, n, &heap_of, k);
+            prop_assert!(counted.comparisons() > 0 || n == 1);
+        }
+
         #[test]
         fn grouped_heaps_pop_in_order_by_their_keys(
             (values, heap_of, k) in (1usize..300, 1u32..12).prop_flat_map(|(n, k)| (

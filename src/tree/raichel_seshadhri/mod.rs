@@ -71,8 +71,14 @@
 //!   as the paper's when they are as short as the contour tree, larger
 //!   when the join or split tree has a long tail where the contour tree is
 //!   balanced (the paper's Figure 2), which is exactly what raining fixes.
-//! - **Binomial heaps are pairing heaps** (same operations, same bounds
-//!   amortised).
+//! - **Binomial heaps are heaps of sorted runs** ([`heap::RunHeaps`]): each
+//!   colour's touched vertices, all known before the first meld, are
+//!   sorted once (Σ k log2 k comparisons for k per colour, where a binomial
+//!   heap is built in O(k)), and a heap is a pairing heap of runs keyed by
+//!   their heads (delete-max: O(log r) amortised for r runs melded, plus
+//!   one). Same operations and answers; the pointers chased live in one
+//!   16-byte node per colour instead of one per entry, which took tooth's
+//!   painting from 0.44 to 0.33 s.
 //! - **The ripe-colour sublist L** (§6.1) is not kept; ripeness is checked
 //!   by looking at every upper neighbour's colour again (at most 14 union-
 //!   find lookups, no comparisons).
@@ -84,7 +90,7 @@
 //! `vertex_arc`), and the paint of both orientations (4 bytes each; the
 //! split tree's is kept as the descent minimum until locating ends): about
 //! 20 bytes at the peak, plus O(t) for the critical vertices (colours, heap
-//! entries of 16 bytes, node records of 32).
+//! entries of 8 bytes and a 16-byte node per colour, node records of 32).
 
 pub mod count;
 pub mod families;

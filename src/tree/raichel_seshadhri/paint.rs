@@ -42,11 +42,11 @@
 //! comparisons read no field values ([`super::count::CountingOrder`]).
 //!
 //! Memory: 4 bytes per vertex of paint (returned: the split tree's is kept
-//! for locating), 16 bytes per heap entry for values of up to 4 bytes, 17
-//! per colour.
+//! for locating), 8 bytes per heap entry for values of up to 4 bytes, 33
+//! per colour (its run heap's node, class root and top, union-find).
 
 use super::count::CountingOrder;
-use super::heap::{self, PairingHeaps};
+use super::heap::{self, RunHeaps};
 use crate::mesh::FreudenthalGrid;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -195,11 +195,9 @@ pub fn critical_join_tree<O: CountingOrder + ?Sized>(
         }
         col_off[i + 1] = cols.len() as u32;
     }
-    // The entries of each colour's heap lie together in the arena, in
-    // critical order (counted first, then placed), and are melded in that
-    // order: the same heaps and comparisons as melding them as they come,
-    // but a heap's first pops, which pair all its entries, read one run of
-    // memory instead of entries strewn over the whole arena.
+    // The entries of each colour's heap, counted, then placed together in
+    // critical order and sorted from the top: the heaps are heaps of these
+    // runs ([`RunHeaps`]), one node per colour.
     let mut start = vec![0u32; colours + 1];
     for &v in m.critical {
         let up = m.upper[v as usize] as u32;
@@ -212,7 +210,7 @@ pub fn critical_join_tree<O: CountingOrder + ?Sized>(
         start[c + 1] += start[c];
     }
     let blank = order.key(m.critical.first().copied().unwrap_or(0));
-    let mut heaps = PairingHeaps::with_len(start[colours] as usize, blank);
+    let mut entries = vec![(blank, NONE); start[colours] as usize];
     let mut fill = start.clone();
     for (i, &v) in m.critical.iter().enumerate() {
         let up = m.upper[v as usize] as u32;
@@ -221,19 +219,18 @@ pub fn critical_join_tree<O: CountingOrder + ?Sized>(
             continue;
         }
         remaining += 1;
+        let key = order.key(v);
         m.grid.link_components(up, |k| {
             let c = paint[step(v, m.offsets, k as u32) as usize] as usize;
-            heaps.set(fill[c], order.key(v), i as u32);
+            entries[fill[c] as usize] = (key, i as u32);
             fill[c] += 1;
         });
     }
     drop(fill);
-    for c in 0..colours {
-        let mut r = heap::NONE;
-        for e in start[c]..start[c + 1] {
-            r = heaps.meld(r, e, order);
-        }
-        root[c] = [r, heaps.top(r).unwrap_or(NONE)];
+    let mut heaps = RunHeaps::new(entries, &start, order);
+    for (c, r) in root.iter_mut().enumerate() {
+        let h = heaps.run(c as u32);
+        *r = [h, heaps.top(h).unwrap_or(NONE)];
     }
     drop(start);
 
