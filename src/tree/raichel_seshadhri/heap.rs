@@ -380,38 +380,26 @@ mod tests {
 
     proptest! {
         #[test]
-        fn run_heaps_pop_in_order_by_their_keys(
+        fn grouped_and_run_heaps_pop_in_order_by_their_keys(
             (values, heap_of, k) in (1usize..300, 1u32..12).prop_flat_map(|(n, k)| (
                 proptest::collection::vec(0u8..6, n),
                 proptest::collection::vec(0..k, n),
                 Just(k),
             ))
         ) {
-            let n = values.len() as u32;
-            let plain = values.as_slice();
-            runs_pop_in_order(plain, n, &heap_of, k);
-            runs_pop_in_order(&Inverted(plain), n, &heap_of, k);
-            let counted = Counted::new(plain);
-            runs_pop_in_order(&counted, n, &heap_of, k);
-            prop_assert!(counted.comparisons() > 0 || n == 1);
-        }
-
-        #[test]
-        fn grouped_heaps_pop_in_order_by_their_keys(
-            (values, heap_of, k) in (1usize..300, 1u32..12).prop_flat_map(|(n, k)| (
-                proptest::collection::vec(0u8..6, n),
-                proptest::collection::vec(0..k, n),
-                Just(k),
-            ))
-        ) {
+            // Heaps of entries and heaps of sorted runs, each under the
+            // order, its inverse, and the counter (the same answers, and
+            // every comparison through above_keys counted).
             let n = values.len() as u32;
             let plain = values.as_slice();
             pops_in_order(plain, n, &heap_of, k);
-            pops_in_order(&Inverted(plain), n, &heap_of, k);
-            // Counted: the same answers, and every comparison through
-            // above_keys is counted.
+            runs_pop_in_order(plain, n, &heap_of, k);
+            let inverted = Inverted(plain);
+            pops_in_order(&inverted, n, &heap_of, k);
+            runs_pop_in_order(&inverted, n, &heap_of, k);
             let counted = Counted::new(plain);
             pops_in_order(&counted, n, &heap_of, k);
+            runs_pop_in_order(&counted, n, &heap_of, k);
             prop_assert!(counted.comparisons() > 0 || n == 1);
         }
     }
