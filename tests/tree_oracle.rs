@@ -236,9 +236,22 @@ fn sweep_trees_both_ways<M: Mesh>(
         sweep::join_tree(mesh, values, &codes, candidates, order, &p).expect("not cancelled"),
         sweep::split_tree(mesh, values, &codes, candidates, order, &p).expect("not cancelled"),
     );
-    let ((join, _), (split, _)) =
-        blocks::sweep_trees(mesh, values, &codes, candidates, order, cuts, &p)
-            .expect("not cancelled");
+    // The words seeded with the codes, as the engine makes them.
+    let (join_words, split_words, counted) = sweep::link_words(mesh, values);
+    assert_eq!(counted, candidates);
+    assert!(join_words.iter().zip(&codes).all(|(&w, &c)| w == c as u32));
+    assert_eq!(join_words, split_words);
+    let ((join, _), (split, _)) = blocks::sweep_trees(
+        mesh,
+        values,
+        join_words,
+        split_words,
+        candidates,
+        order,
+        cuts,
+        &p,
+    )
+    .expect("not cancelled");
     (whole, (join, split))
 }
 

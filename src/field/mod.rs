@@ -89,6 +89,20 @@ pub trait VertexOrder: Sync {
             std::cmp::Ordering::Less
         }
     }
+
+    /// For the consecutive vertices `v = first + i` (one per entry of
+    /// `out`), the bit mask of the `offsets` whose vertex comes after `v`:
+    /// bit `j` of `out[i]` is [`Self::above`]`(v + offsets[j], v)`. Every
+    /// `v + offsets[j]` must be a vertex. What the link classification of a
+    /// grid's interior rows asks, a row at a time.
+    fn above_masks(&self, first: u32, offsets: &[i64], out: &mut [u16]) {
+        for (i, m) in out.iter_mut().enumerate() {
+            let v = first + i as u32;
+            *m = offsets.iter().enumerate().fold(0, |m, (j, &o)| {
+                m | (self.above((v as i64 + o) as u32, v) as u16) << j
+            });
+        }
+    }
 }
 
 impl<T: Scalar> VertexOrder for [T] {
@@ -96,6 +110,30 @@ impl<T: Scalar> VertexOrder for [T] {
     fn above(&self, a: u32, b: u32) -> bool {
         let (fa, fb) = (self[a as usize], self[b as usize]);
         fa > fb || (fa == fb && a > b)
+    }
+
+    /// One offset at a time over the whole run, comparing values alone: a
+    /// vertex at a positive offset has the larger id, so it is above iff
+    /// its value is `>=`, and at a negative offset iff `>` (the same answer
+    /// as [`Self::above`] for every value, NaN and -0.0 included). Plain
+    /// loops over slices, which the compiler turns into vector compares.
+    fn above_masks(&self, first: u32, offsets: &[i64], out: &mut [u16]) {
+        let (first, len) = (first as usize, out.len());
+        let centre = &self[first..first + len];
+        out.fill(0);
+        for (j, &o) in offsets.iter().enumerate() {
+            let start = (first as i64 + o) as usize;
+            let other = &self[start..start + len];
+            if o > 0 {
+                for ((m, &a), &b) in out.iter_mut().zip(other).zip(centre) {
+                    *m |= ((a >= b) as u16) << j;
+                }
+            } else {
+                for ((m, &a), &b) in out.iter_mut().zip(other).zip(centre) {
+                    *m |= ((a > b) as u16) << j;
+                }
+            }
+        }
     }
 }
 

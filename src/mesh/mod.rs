@@ -330,36 +330,53 @@ impl Mesh for FreudenthalGrid {
         self.link.codes[up as usize] | self.link.codes[(present & !up) as usize] << 4
     }
 
-    /// Walks the grid in id order, keeping (x, y, z) by increments, so that
-    /// interior vertices (nearly all of them) skip the boundary test and
-    /// compare all their neighbours branch-free.
+    /// Walks the grid row by row in id order. The interior part of a row
+    /// (nearly every vertex) is classified a run at a time: the masks of
+    /// its upper links by [`VertexOrder::above_masks`] (one vector compare
+    /// per neighbour offset), then two table lookups per vertex; vertices
+    /// on the boundary take [`Mesh::link_code`].
     fn link_codes_into<O: VertexOrder + ?Sized>(&self, order: &O, first: u32, out: &mut [u8]) {
+        const RUN: usize = 512;
         let [dx, dy, dz] = self.dims.map(|d| d as u32);
         let inside = |c: u32, d: u32| d == 1 || (c > 0 && c + 1 < d);
+        // The interior x range of a row.
+        let (x_lo, x_hi) = if dx == 1 { (0, 1) } else { (1, dx - 1) };
         let all = (1u32 << self.directions.len()) - 1;
-        let [mut x, mut y, mut z] = self.coords(first);
-        let mut row_inside = inside(y, dy) && inside(z, dz);
-        for (i, code) in out.iter_mut().enumerate() {
+        let mut masks = [0u16; RUN];
+        let mut i = 0usize;
+        while i < out.len() {
             let v = first + i as u32;
-            *code = if row_inside && inside(x, dx) {
-                let mut up = 0u32;
-                for (j, &o) in self.interior_offsets.iter().enumerate() {
-                    up |= (order.above((v as i64 + o) as u32, v) as u32) << j;
-                }
-                self.link.codes[up as usize] | self.link.codes[(all & !up) as usize] << 4
+            let [x, y, z] = self.coords(v);
+            // This row's part of `out`: vertices v .. v + row.
+            let row = ((dx - x) as usize).min(out.len() - i);
+            let (lo, hi) = if inside(y, dy) && inside(z, dz) {
+                let lo = x_lo.max(x).min(x + row as u32);
+                (lo, x_hi.min(x + row as u32).max(lo))
             } else {
-                self.link_code(v, |u| order.above(u, v))
+                (x, x)
             };
-            x += 1;
-            if x == dx {
-                x = 0;
-                y += 1;
-                if y == dy {
-                    y = 0;
-                    z += 1;
+            let boundary = |xs: std::ops::Range<u32>, out: &mut [u8]| {
+                for xx in xs {
+                    let u = v + (xx - x);
+                    out[i + (xx - x) as usize] = self.link_code(u, |w| order.above(w, u));
                 }
-                row_inside = inside(y, dy) && inside(z, dz);
+            };
+            boundary(x..lo, out);
+            let mut s = lo;
+            while s < hi {
+                let e = hi.min(s + RUN as u32);
+                let run = &mut masks[..(e - s) as usize];
+                order.above_masks(v + (s - x), &self.interior_offsets, run);
+                let at = i + (s - x) as usize;
+                for (code, &up) in out[at..at + run.len()].iter_mut().zip(run.iter()) {
+                    let up = up as u32;
+                    *code =
+                        self.link.codes[up as usize] | self.link.codes[(all & !up) as usize] << 4;
+                }
+                s = e;
             }
+            boundary(hi.max(lo)..x + row as u32, out);
+            i += row;
         }
     }
 
@@ -506,24 +523,54 @@ mod tests {
         out
     }
 
-    #[test]
-    fn row_walk_link_codes_equal_per_vertex_codes() {
-        for dims in [[7, 6, 5], [5, 4, 1], [9, 1, 1], [3, 3, 3]] {
+    /// The row walk's codes against [`Mesh::link_code`] per vertex, from
+    /// `first` for `len` vertices.
+    fn assert_row_walk<O: VertexOrder + ?Sized>(
+        g: &FreudenthalGrid,
+        values: &O,
+        first: usize,
+        len: usize,
+    ) {
+        let expected: Vec<u8> = (first..first + len)
+            .map(|v| g.link_code(v as u32, |u| values.above(u, v as u32)))
+            .collect();
+        let mut out = vec![0u8; len];
+        g.link_codes_into(values, first as u32, &mut out);
+        assert_eq!(out, expected, "{:?} from {first}, {len} vertices", g.dims());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        /// Any grid (rows longer than a run of the vectorised pass, 2D and
+        /// 1D grids), any span of vertices, and values with heavy ties,
+        /// NaN, -0.0 and 0.0: the vectorised compares give the codes the
+        /// vertex order gives.
+        #[test]
+        fn row_walk_link_codes_equal_per_vertex_codes(
+            dims in (1usize..1100, 1usize..6, 1usize..5),
+            seed in proptest::prelude::any::<u64>(),
+            levels in 1u32..6,
+            span in (0.0f64..1.0, 0.0f64..1.0),
+        ) {
+            let dims = [dims.0, dims.1, dims.2];
             let g = FreudenthalGrid::new(dims);
             let n = g.num_vertices();
-            // Few distinct values, so ties decide many comparisons.
-            let values: Vec<u8> = (0..n as u32)
-                .map(|v| (v.wrapping_mul(2654435761) >> 29) as u8)
+            let first = ((n as f64 * span.0) as usize).min(n - 1);
+            let len = 1 + ((n - first - 1) as f64 * span.1) as usize;
+            let r = |v: usize| ((v as u64 ^ seed).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as u32;
+            let bytes: Vec<u8> = (0..n).map(|v| (r(v) % levels) as u8).collect();
+            let halves: Vec<i16> = (0..n).map(|v| (r(v) % levels) as i16 - 2).collect();
+            let floats: Vec<f32> = (0..n)
+                .map(|v| match r(v) % (levels + 3) {
+                    0 => f32::NAN,
+                    1 => -0.0,
+                    2 => 0.0,
+                    k => k as f32 * 0.5 - 2.0,
+                })
                 .collect();
-            let values = values.as_slice();
-            let expected: Vec<u8> = (0..n as u32)
-                .map(|v| g.link_code(v, |u| values.above(u, v)))
-                .collect();
-            for first in [0, 1, n / 3, n - 1] {
-                let mut out = vec![0u8; n - first];
-                g.link_codes_into(values, first as u32, &mut out);
-                assert_eq!(out, expected[first..], "{dims:?} from {first}");
-            }
+            assert_row_walk(&g, bytes.as_slice(), first, len);
+            assert_row_walk(&g, halves.as_slice(), first, len);
+            assert_row_walk(&g, floats.as_slice(), first, len);
         }
     }
 

@@ -67,8 +67,7 @@
 //! vertices on smooth fields.
 
 use super::sweep::{
-    self, Block, BlockTree, CANDIDATE, JoinTree, NONE, ROOT, SplitTree, SweepTree, find,
-    is_candidate, union,
+    self, Block, BlockTree, CANDIDATE, JoinTree, NONE, ROOT, SplitTree, SweepTree, find, union,
 };
 use crate::field::VertexOrder;
 use crate::mesh::Mesh;
@@ -102,11 +101,13 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// The join and split trees of the whole mesh, computed in the blocks
 /// `cuts` defines (`cuts[0] = 0 < cuts[1] < ... = n`) and glued, with the
 /// time each took. Identical to [`sweep::join_tree`] and
-/// [`sweep::split_tree`].
+/// [`sweep::split_tree`]. `join_words` and `split_words` are the sweeps'
+/// words seeded with the link codes ([`sweep::link_words`]).
 pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
-    link_codes: &[u8],
+    mut join_words: Vec<u32>,
+    mut split_words: Vec<u32>,
     candidates: usize,
     order: &[u32],
     cuts: &[u32],
@@ -124,14 +125,21 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             || {
                 let t = Instant::now();
                 sweep::whole(
-                    mesh, values, link_codes, candidates, true, order, progress, true,
+                    mesh, values, join_words, candidates, true, order, progress, true,
                 )
                 .map(|s| (JoinTree(s), t.elapsed()))
             },
             || {
                 let t = Instant::now();
                 sweep::whole(
-                    mesh, values, link_codes, candidates, false, order, progress, false,
+                    mesh,
+                    values,
+                    split_words,
+                    candidates,
+                    false,
+                    order,
+                    progress,
+                    false,
                 )
                 .map(|s| (SplitTree(s), t.elapsed()))
             },
@@ -146,7 +154,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         .collect();
     let nodes_in: Vec<usize> = blocks
         .par_iter()
-        .map(|b| b.count_nodes(link_codes))
+        .map(|b| b.count_nodes(&join_words))
         .collect();
     let mut offset = vec![0u32; blocks.len() + 1];
     for (b, &k) in nodes_in.iter().enumerate() {
@@ -154,8 +162,6 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     }
 
     // 1. Both sweeps of every block, all at once.
-    let mut join_words = vec![NONE; n];
-    let mut split_words = vec![NONE; n];
     let mut tasks: Vec<(bool, usize, &mut [u32])> = Vec::with_capacity(2 * blocks.len());
     for (join, words) in [(true, &mut join_words), (false, &mut split_words)] {
         let mut rest = words.as_mut_slice();
@@ -174,7 +180,6 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             let tree = sweep::sweep::<M, O, true>(
                 mesh,
                 values,
-                link_codes,
                 nodes_in[b],
                 join,
                 order,
@@ -229,9 +234,9 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             (above, below)
         })
         .unzip();
-    let candidate: Vec<bool> = node_vertex
-        .par_iter()
-        .map(|&v| is_candidate(link_codes[v as usize]))
+    let candidate: Vec<bool> = split_trees
+        .iter()
+        .flat_map(|t| t.candidate.iter().copied())
         .collect();
     let gluing = Gluing {
         values,

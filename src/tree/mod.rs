@@ -13,16 +13,17 @@
 //! of every block at once, glued into the same two trees ([`blocks`]: the
 //! divide and conquer of Pascucci and Cole-McLaughlin).
 //!
-//! **Memory per vertex** (n vertices, beyond the field's own values): 13
-//! bytes at the peak, during the sweeps (order 4, link codes 1, and each
-//! sweep's one word per vertex, 4: the union-find lives on the
-//! candidates); merge and placement hold 12 (order and the two leafward
-//! arrays, the first of which becomes `vertex_arc`), then the arcs' vertex
-//! lists take the place of the second. Candidates add 24 bytes each during
-//! the sweeps and about 88 at the merge's peak ([`peak_bytes`]): little on
-//! smooth fields (a few per cent of the vertices), but on noisy scans
-//! (tooth 31 %) and white noise, where half the vertices are candidates,
-//! the peak is then 30-55 bytes per vertex. [`check_memory`] refuses a
+//! **Memory per vertex** (n vertices, beyond the field's own values): 12
+//! bytes at the peak. The float sort holds 12 ((value, id) pairs and the
+//! order); the sweeps 12 (order 4, and each sweep's one word per vertex,
+//! 4, which holds the vertex's link code until the sweep visits it: the
+//! union-find lives on the candidates); merge and placement 12 (order and
+//! the two leafward arrays, the first of which becomes `vertex_arc`), then
+//! the arcs' vertex lists take the place of the second. Candidates add 24
+//! bytes each during the sweeps and about 88 at the merge's peak
+//! ([`peak_bytes`]): little on smooth fields (a few per cent of the
+//! vertices), but on noisy scans (tooth 31 %) and white noise, where half
+//! the vertices are candidates, the peak is then 30-55 bytes per vertex. [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted. The
 //! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
 //! O(supernodes).
@@ -189,23 +190,23 @@ impl From<Cancelled> for BuildError {
 }
 
 /// Peak bytes the engine holds beyond the values for `n` vertices of
-/// which `candidates` are candidate nodes (the module doc's account): 13
+/// which `candidates` are candidate nodes (the module doc's account): 12
 /// per vertex and 24 per candidate while sweeping, 12 per vertex and 88
 /// per candidate at the merge (its tables and the tree it builds; fitted
 /// to the peaks `flexiso bench` measures on tooth, engine, the brains and
 /// aneurism, within 5 %).
 pub fn peak_bytes(n: usize, candidates: usize) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    (13 * n + 24 * k).max(12 * n + 88 * k)
+    12 * n + 88 * k
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
-/// once the vertex order and link codes (5 bytes per vertex, already held)
-/// are counted back in: a clear error instead of an allocation failure
+/// once the vertex order and the link codes in the sweeps' words (12 bytes
+/// per vertex, already held) are counted back in: a clear error instead of an allocation failure
 /// halfway through, on volumes that are large *and* noisy.
 pub fn check_memory(n: usize, candidates: usize, available: u64) -> Result<(), BuildError> {
     let needed = peak_bytes(n, candidates);
-    let available = available.saturating_add(5 * n as u64);
+    let available = available.saturating_add(12 * n as u64);
     if needed > available {
         return Err(BuildError::OutOfMemory {
             vertices: n,
@@ -280,15 +281,21 @@ impl ContourTree {
         }
         progress.stage("join and split trees");
         let t = Instant::now();
-        let codes = sweep::link_codes(mesh, values);
-        let candidates = sweep::count_candidates(&codes);
+        let (join_words, split_words, candidates) = sweep::link_words(mesh, values);
         times.links = t.elapsed();
         if let Some(available) = crate::field::io::available_memory() {
             check_memory(mesh.num_vertices(), candidates, available)?;
         }
-        let ((mut join, tj), (mut split, ts)) =
-            blocks::sweep_trees(mesh, values, &codes, candidates, order, cuts, progress)?;
-        drop(codes);
+        let ((mut join, tj), (mut split, ts)) = blocks::sweep_trees(
+            mesh,
+            values,
+            join_words,
+            split_words,
+            candidates,
+            order,
+            cuts,
+            progress,
+        )?;
         progress.check(0, 1)?;
         times.join = tj;
         times.split = ts;
@@ -492,7 +499,7 @@ mod tests {
     fn memory_check_follows_the_candidates() {
         let gib = 1u64 << 30;
         let n = 1usize << 30; // 1024^3
-        // A scan or smooth field (2 % candidates): 13.5 bytes per vertex.
+        // A scan or smooth field (2 % candidates): 13.8 bytes per vertex.
         assert!(check_memory(n, n / 50, 16 * gib).is_ok());
         // The same volume noisy (28 % candidates) on the same machine.
         let noisy = n * 28 / 100;
@@ -504,7 +511,7 @@ mod tests {
             panic!("refused for memory")
         };
         assert_eq!(needed, peak_bytes(n, noisy));
-        assert_eq!(available, 16 * gib + 5 * n as u64);
+        assert_eq!(available, 16 * gib + 12 * n as u64);
         assert!(
             needed > 23 * gib,
             "the merge's 40 bytes per candidate dominate"
@@ -514,8 +521,8 @@ mod tests {
         assert!(message.contains("candidate nodes"), "{message}");
         // Exactly at the limit is allowed, a byte more is not.
         let peak = peak_bytes(1000, 10);
-        assert!(check_memory(1000, 10, peak - 5000).is_ok());
-        assert!(check_memory(1000, 10, peak - 5001).is_err());
+        assert!(check_memory(1000, 10, peak - 12_000).is_ok());
+        assert!(check_memory(1000, 10, peak - 12_001).is_err());
     }
     use crate::field::Values;
     use proptest::prelude::*;

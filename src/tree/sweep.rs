@@ -29,9 +29,18 @@
 //! Candidates are numbered in the vertex order (`0` = global minimum), so
 //! comparing two candidate numbers compares heights.
 //!
-//! **Memory per vertex** while sweeping: 4 bytes (its word: candidate
-//! number or leafward candidate); per candidate 10 bytes (union-find,
-//! rank, parent, children), and 4 more in the split sweep (its vertex).
+//! **Link codes in the words.** Before a sweep, each vertex's word holds
+//! its link code ([`Mesh::link_code`], both nibbles: [`link_words`]); the
+//! sweep reads it when it visits the vertex and then overwrites it with
+//! the candidate number or leafward candidate. A word is read as a code
+//! only before its vertex is visited and as a result only after, so the
+//! codes need no array of their own, and the sweep touches one word per
+//! vertex where it touched a code and a word.
+//!
+//! **Memory per vertex** while sweeping: 4 bytes (its word: link code,
+//! then candidate number or leafward candidate); per candidate 10 bytes
+//! (union-find, rank, parent, children), and 4 more in the split sweep
+//! (its vertex).
 
 use crate::field::VertexOrder;
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
@@ -120,10 +129,8 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<JoinTree, Cancelled> {
-    whole(
-        mesh, values, link_codes, candidates, true, order, progress, true,
-    )
-    .map(JoinTree)
+    let words = link_codes.par_iter().map(|&c| c as u32).collect();
+    whole(mesh, values, words, candidates, true, order, progress, true).map(JoinTree)
 }
 
 /// The split tree: sweeps `order` (ascending) from its start.
@@ -135,19 +142,21 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<SplitTree, Cancelled> {
+    let words = link_codes.par_iter().map(|&c| c as u32).collect();
     whole(
-        mesh, values, link_codes, candidates, false, order, progress, true,
+        mesh, values, words, candidates, false, order, progress, true,
     )
     .map(SplitTree)
 }
 
 /// One sweep over the whole mesh: one block, whose nodes are the candidates.
-/// It sets the progress fraction if it `report`s.
+/// `words` holds every vertex's link code ([`link_words`]) and becomes the
+/// tree's `leafward`. It sets the progress fraction if it `report`s.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
-    link_codes: &[u8],
+    mut words: Vec<u32>,
     candidates: usize,
     join: bool,
     order: &[u32],
@@ -155,21 +164,12 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     report: bool,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
-    let mut leafward = vec![NONE; n];
+    debug_assert_eq!(words.len(), n);
     let block = Block::new(0, n as u32, n, 0);
     let swept = sweep::<M, O, false>(
-        mesh,
-        values,
-        link_codes,
-        candidates,
-        join,
-        order,
-        block,
-        &mut leafward,
-        !join,
-        progress,
-        report,
+        mesh, values, candidates, join, order, block, &mut words, !join, progress, report,
     )?;
+    let leafward = words;
     Ok(SweepTree {
         parent: swept.parent,
         children: swept.children,
@@ -235,15 +235,20 @@ impl Block {
         (self.lo..self.inner_lo).chain(self.inner_hi.max(self.inner_lo)..self.hi)
     }
 
-    /// The nodes of the block's trees: its candidates and its band.
-    pub fn count_nodes(&self, link_codes: &[u8]) -> usize {
+    /// The nodes of the block's trees: its candidates and its band, from
+    /// the words of the whole mesh while they hold the link codes.
+    pub fn count_nodes(&self, words: &[u32]) -> usize {
         let (lo, hi) = (self.lo as usize, self.hi as usize);
         let (ilo, ihi) = (
             self.inner_lo as usize,
             self.inner_hi.max(self.inner_lo) as usize,
         );
         let band = (ilo - lo) + (hi - ihi);
-        band + count_candidates(&link_codes[ilo..ihi])
+        let candidates: usize = words[ilo..ihi]
+            .par_chunks(1 << 16)
+            .map(|c| c.iter().filter(|&&w| is_candidate(w as u8)).count())
+            .sum();
+        band + candidates
     }
 }
 
@@ -256,12 +261,16 @@ pub(super) struct BlockTree {
     pub children: Vec<u8>,
     /// Per node: its vertex, ascending (only when asked for).
     pub vertex: Vec<u32>,
+    /// Per node: whether it is a candidate, not only a band vertex (when
+    /// the vertices are asked for, in a block with a band).
+    pub candidate: Vec<bool>,
 }
 
 /// One sweep of `block` (descending for the join tree, ascending for the
 /// split tree) on the edges inside it, with `nodes` nodes (its candidates
 /// and band). `leafward` is the block's part of the per-vertex word
-/// (`leafward[v - lo]`). `values` gives the vertex order; testing "already
+/// (`leafward[v - lo]`), which holds the link code of every vertex not yet
+/// visited (see the module documentation). `values` gives the vertex order; testing "already
 /// swept" on it rather than on the union-find keeps the hot loop in the
 /// compact value array. Only a `report`ing sweep sets the progress
 /// fraction; every sweep stops when it is cancelled.
@@ -275,7 +284,6 @@ pub(super) struct BlockTree {
 pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     mesh: &M,
     values: &O,
-    link_codes: &[u8],
     nodes: usize,
     join: bool,
     order: &[u32],
@@ -298,6 +306,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     let mut parent = vec![NONE; nodes];
     let mut children = vec![0u8; nodes];
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
+    let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
     // The number of the next node visited.
     let mut next: u32 = if join { nodes as u32 } else { 0 };
@@ -348,23 +357,23 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
             let v = at(i);
             if i + AHEAD < m {
                 // A vertex that is not a node reads one neighbour's word
-                // and writes its own: two lines, not its whole star. Its
-                // code was prefetched AHEAD vertices ago. (Indices are
-                // relative to the block: the hints only add offsets.)
+                // and its own: two lines, not its whole star. Its own word
+                // (its code) was prefetched AHEAD vertices ago. (Indices
+                // are relative to the block: the hints only add offsets.)
                 let w = at(i + AHEAD);
-                let cw = link_codes[w as usize];
+                let cw = leafward[(w - lo) as usize] as u8;
                 if is_candidate(cw) || (BLOCKED && block.in_band(w)) {
                     mesh.prefetch_star(w - lo, leafward);
                 } else {
                     let c = if join { cw & 0xf } else { cw >> 4 };
                     prefetch(leafward, (mesh.neighbour_at(w, c) - lo) as usize);
-                    prefetch(leafward, (w - lo) as usize);
                 }
                 if i + 2 * AHEAD < m {
-                    prefetch(link_codes, at(i + 2 * AHEAD) as usize);
+                    prefetch(leafward, (at(i + 2 * AHEAD) - lo) as usize);
                 }
             }
-            let full = link_codes[v as usize];
+            // Not visited yet: the word is v's link code.
+            let full = leafward[(v - lo) as usize] as u8;
             let code = if join { full & 0xf } else { full >> 4 };
             let band = BLOCKED && block.in_band(v);
             if !band && !is_candidate(full) {
@@ -385,6 +394,9 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
             leafward[(v - lo) as usize] = CANDIDATE | kid;
             if keep_vertex {
                 vertex[kid as usize] = v;
+                if BLOCKED {
+                    candidate[kid as usize] = is_candidate(full);
+                }
             }
             let mut root = kid;
             uf[kid as usize] = ROOT | kid;
@@ -432,6 +444,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
         parent,
         children,
         vertex,
+        candidate,
     })
 }
 
@@ -491,6 +504,38 @@ pub(crate) fn prefetch<T>(data: &[T], i: usize) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (data, i);
+}
+
+/// The two sweeps' words seeded with every vertex's link code (the same
+/// code in both; see the module documentation), and the number of
+/// candidates: [`link_codes`] without an array of codes, 64 Ki vertices
+/// at a time on every core.
+pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(
+    mesh: &M,
+    values: &O,
+) -> (Vec<u32>, Vec<u32>, usize) {
+    const CHUNK: usize = 1 << 16;
+    let n = mesh.num_vertices();
+    let mut join = vec![0u32; n];
+    let mut split = vec![0u32; n];
+    let candidates = join
+        .par_chunks_mut(CHUNK)
+        .zip(split.par_chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(c, (j, s))| {
+            let mut codes = [0u8; CHUNK];
+            let codes = &mut codes[..j.len()];
+            mesh.link_codes_into(values, (c * CHUNK) as u32, codes);
+            let mut count = 0;
+            for ((j, s), &code) in j.iter_mut().zip(s.iter_mut()).zip(codes.iter()) {
+                *j = code as u32;
+                *s = code as u32;
+                count += is_candidate(code) as usize;
+            }
+            count
+        })
+        .sum();
+    (join, split, candidates)
 }
 
 /// Summaries of every vertex's upper link (low nibble) and lower link (high
