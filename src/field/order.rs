@@ -53,7 +53,7 @@ fn counting_sort<K>(n: usize, key: K, buckets: usize) -> Vec<u32>
 where
     K: Fn(usize) -> usize + Sync,
 {
-    let mut out = vec![0u32; n];
+    let mut out = crate::pages::filled(n, 0u32);
     scatter_by_key(0..n, &key, buckets, &mut out, |i| i as u32);
     out
 }
@@ -136,7 +136,7 @@ where
 {
     // (key, id) pairs scattered by the key's high 16 bits, read in id order:
     // no key is read again, nor from random places.
-    let mut pairs = vec![0u64; n];
+    let mut pairs = crate::pages::filled(n, 0u64);
     let starts = scatter_by_key(
         0..n,
         &|i| (key(i) >> 16) as usize,
@@ -151,9 +151,22 @@ where
         buckets.push(head);
         rest = tail;
     }
-    // (key, id) is unique, so an unstable sort is the order.
-    buckets.into_par_iter().for_each(|b| b.sort_unstable());
-    let mut out = vec![0u32; n];
+    // Each bucket's pairs are in id order: sorting them stably by the low
+    // 16 bits of the key leaves them in (key, id) order. A bucket too large
+    // for the scratch (more than an eighth of the ids: one value filling a
+    // volume) is sorted in place instead; (key, id) is unique, so an
+    // unstable sort gives the same order.
+    let limit = (n / 8).max(1 << 16);
+    buckets
+        .into_par_iter()
+        .for_each_init(Vec::new, |scratch, b| {
+            if b.len() < 256 || b.len() > limit {
+                b.sort_unstable();
+            } else {
+                sort_low_key_bits(b, scratch);
+            }
+        });
+    let mut out = crate::pages::filled(n, 0u32);
     out.par_chunks_mut(1 << 16)
         .zip(pairs.par_chunks(1 << 16))
         .for_each(|(o, p)| {
@@ -162,6 +175,45 @@ where
             }
         });
     out
+}
+
+/// Sorts (key, id) pairs stably by bits 0..16 of the key (bits 32..48 of
+/// the pair): two counting passes of 8 bits, least significant first,
+/// through `scratch`.
+fn sort_low_key_bits(pairs: &mut [u64], scratch: &mut Vec<u64>) {
+    scratch.clear();
+    scratch.resize(pairs.len(), 0);
+    let mut in_pairs = true;
+    for shift in [32, 40] {
+        let digit = |p: u64| ((p >> shift) & 0xff) as usize;
+        let (src, dst): (&[u64], &mut [u64]) = if in_pairs {
+            (&*pairs, scratch.as_mut_slice())
+        } else {
+            (scratch.as_slice(), &mut *pairs)
+        };
+        let mut count = [0usize; 256];
+        for &p in src.iter() {
+            count[digit(p)] += 1;
+        }
+        if count.contains(&src.len()) {
+            continue; // one digit: this pass would not move anything
+        }
+        let mut next = [0usize; 256];
+        let mut total = 0;
+        for (n, c) in next.iter_mut().zip(count) {
+            *n = total;
+            total += c;
+        }
+        for &p in src.iter() {
+            let d = &mut next[digit(p)];
+            dst[*d] = p;
+            *d += 1;
+        }
+        in_pairs = !in_pairs;
+    }
+    if !in_pairs {
+        pairs.copy_from_slice(scratch);
+    }
 }
 
 fn fix_signed_zero_ties(v: &[f64], ids: &mut [u32]) {
@@ -242,6 +294,32 @@ mod tests {
                 "{}",
                 values.type_name()
             );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// 32-bit keys through every path of the bucket sort: buckets below
+        /// the radix threshold, buckets sorted by their low key bits (one
+        /// digit or two), and a bucket larger than the scratch allows (most
+        /// values within one high-16-bit bucket).
+        #[test]
+        fn thirty_two_bit_keys_sort_by_value_then_id(
+            n in 1usize..300_000,
+            spread in 0u32..24,
+            seed in proptest::prelude::any::<u64>(),
+        ) {
+            let r = |i: usize| ((i as u64 ^ seed).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as u32;
+            let narrow = |i: usize| r(i) & ((1u32 << spread) - 1);
+            let all = [
+                Values::F32((0..n).map(|i| 1.0 + narrow(i) as f32 * 1.2e-7).collect()),
+                Values::F32((0..n).map(|i| f32::from_bits(r(i) >> 2) - 0.5).collect()),
+                Values::U32((0..n).map(narrow).collect()),
+                Values::I32((0..n).map(|i| narrow(i) as i32 - (1 << 10)).collect()),
+            ];
+            for values in &all {
+                proptest::prop_assert_eq!(vertex_order(values), by_comparison(values));
+            }
         }
     }
 

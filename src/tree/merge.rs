@@ -482,7 +482,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: &[u32]) -> (Vec<u32>, Ve
         }
     }
     offsets[arcs] = total;
-    let mut arc_vertices = vec![0u32; total as usize];
+    let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
     let dst = SharedSlots(arc_vertices.as_mut_ptr());
     order
         .par_chunks(chunk_len)

@@ -516,8 +516,8 @@ pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(
 ) -> (Vec<u32>, Vec<u32>, usize) {
     const CHUNK: usize = 1 << 16;
     let n = mesh.num_vertices();
-    let mut join = vec![0u32; n];
-    let mut split = vec![0u32; n];
+    let mut join = crate::pages::filled(n, 0u32);
+    let mut split = crate::pages::filled(n, 0u32);
     let candidates = join
         .par_chunks_mut(CHUNK)
         .zip(split.par_chunks_mut(CHUNK))

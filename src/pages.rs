@@ -1,0 +1,71 @@
+//! Per-vertex arrays on transparent huge pages.
+//!
+//! The engine's sweeps and groupings visit vertices in value order, which
+//! on a smooth field is scattered across the volume: nearly every access
+//! to a per-vertex array lands on another 4 KiB page, so beside the cache
+//! miss the processor walks the page table (a TLB holds a few thousand
+//! pages: a few MiB, against 64 MiB for one word per vertex of a 256³
+//! volume). On 2 MiB pages the same arrays need a few dozen TLB entries,
+//! and filling them takes one page fault per 2 MiB instead of 512.
+//!
+//! Linux gives huge pages to anonymous memory asked for with
+//! `madvise(MADV_HUGEPAGE)` when transparent huge pages are enabled
+//! ("always" or "madvise", the common default); elsewhere, or when the
+//! kernel has none to give, the hint is ignored and the array is an
+//! ordinary one. Nothing here changes what an array holds.
+
+use rayon::prelude::*;
+
+/// Arrays smaller than this stay on ordinary pages.
+const HUGE: usize = 4 << 20;
+
+/// An array of `n` copies of `value`, on huge pages when it is large,
+/// filled on every core (so the pages are first touched in parallel).
+pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
+    let mut v: Vec<T> = Vec::with_capacity(n);
+    advise(v.as_ptr() as *const u8, n * size_of::<T>());
+    v.spare_capacity_mut()[..n]
+        .par_chunks_mut(1 << 16)
+        .for_each(|c| c.iter_mut().for_each(|x| _ = x.write(value)));
+    // SAFETY: the first n elements were all written just above.
+    unsafe { v.set_len(n) };
+    v
+}
+
+/// Asks for huge pages for the `len` bytes at `start` (allocated, not yet
+/// touched). Only whole 4 KiB pages inside the range are advised; a hint
+/// the kernel refuses is ignored.
+fn advise(start: *const u8, len: usize) {
+    #[cfg(target_os = "linux")]
+    if len >= HUGE {
+        const PAGE: usize = 4096;
+        let first = (start as usize).next_multiple_of(PAGE);
+        let end = (start as usize + len) / PAGE * PAGE;
+        if end > first {
+            // SAFETY: madvise only changes how the kernel backs these
+            // pages, which lie inside the caller's allocation; it never
+            // changes their contents.
+            unsafe {
+                libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (start, len, HUGE);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn filled_arrays_hold_their_value_small_and_large() {
+        for n in [0, 1, 1000, (HUGE / 4) + 12_345] {
+            let v = filled(n, 7u32);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().all(|&x| x == 7));
+        }
+        let v = filled(HUGE, u64::MAX);
+        assert!(v.iter().all(|&x| x == u64::MAX));
+    }
+}
