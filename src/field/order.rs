@@ -3,9 +3,10 @@
 //! Ties broken by id are what simulation of simplicity means on a grid, and
 //! every sort here is *stable over ids*, so ties come out in id order without
 //! comparing ids: counting sort for 8- and 16-bit values (O(n), one pass to
-//! count, one to place, both in parallel chunks), a parallel MSD radix sort
-//! on 32-bit keys (bucket by the high 16 bits, then each bucket on its own
-//! thread), and a parallel comparison sort only for f64.
+//! count, one to place, both in parallel chunks), a parallel radix sort on
+//! 32-bit keys ((key, id) pairs bucketed by the high 16 bits, then each
+//! bucket on its own thread by the low 16 bits, least significant byte
+//! first), and a parallel comparison sort only for f64.
 
 use super::Values;
 use rayon::prelude::*;
@@ -129,7 +130,7 @@ unsafe impl<T: Send> Sync for SharedOut<T> {}
 /// key's high 16 bits (a stable parallel counting pass in id order), then
 /// each bucket's pairs are sorted on their own thread, and the ids read
 /// off. Needs 8 bytes per id beyond the output while sorting, so 12 in
-/// all: below the sweeps' 13.
+/// all, as the sweeps.
 fn radix_sort_u32_keys<K>(n: usize, key: K) -> Vec<u32>
 where
     K: Fn(usize) -> u32 + Sync,
@@ -152,11 +153,13 @@ where
         rest = tail;
     }
     // Each bucket's pairs are in id order: sorting them stably by the low
-    // 16 bits of the key leaves them in (key, id) order. A bucket too large
-    // for the scratch (more than an eighth of the ids: one value filling a
-    // volume) is sorted in place instead; (key, id) is unique, so an
-    // unstable sort gives the same order.
-    let limit = (n / 8).max(1 << 16);
+    // 16 bits of the key leaves them in (key, id) order. Each thread's
+    // scratch holds at most n / (2 threads) pairs, so all of them together
+    // stay within the 4 bytes per id that `out` takes later; a larger
+    // bucket (one value filling much of a volume) is sorted in place
+    // instead: (key, id) is unique, so an unstable sort gives the same
+    // order.
+    let limit = (n / (2 * rayon::current_num_threads())).max(1 << 16);
     buckets
         .into_par_iter()
         .for_each_init(Vec::new, |scratch, b| {
