@@ -184,23 +184,33 @@ where
 /// the pair): two counting passes of 8 bits, least significant first,
 /// through `scratch`.
 fn sort_low_key_bits(pairs: &mut [u64], scratch: &mut Vec<u64>) {
+    // Both digits' counts in one pass (a digit's counts do not depend on
+    // the order the pairs are in).
+    let mut counts = [[0usize; 256]; 2];
+    for &p in pairs.iter() {
+        counts[0][((p >> 32) & 0xff) as usize] += 1;
+        counts[1][((p >> 40) & 0xff) as usize] += 1;
+    }
+    // A digit that all pairs share moves nothing: a bucket of one value
+    // (a plateau) is already in order and needs no scratch at all.
+    let moves = counts.map(|c| !c.contains(&pairs.len()));
+    if moves == [false, false] {
+        return;
+    }
     scratch.clear();
     scratch.resize(pairs.len(), 0);
     let mut in_pairs = true;
-    for shift in [32, 40] {
+    for (pass, shift) in [32, 40].into_iter().enumerate() {
+        if !moves[pass] {
+            continue;
+        }
+        let count = counts[pass];
         let digit = |p: u64| ((p >> shift) & 0xff) as usize;
         let (src, dst): (&[u64], &mut [u64]) = if in_pairs {
             (&*pairs, scratch.as_mut_slice())
         } else {
             (scratch.as_slice(), &mut *pairs)
         };
-        let mut count = [0usize; 256];
-        for &p in src.iter() {
-            count[digit(p)] += 1;
-        }
-        if count.contains(&src.len()) {
-            continue; // one digit: this pass would not move anything
-        }
         let mut next = [0usize; 256];
         let mut total = 0;
         for (n, c) in next.iter_mut().zip(count) {
