@@ -102,7 +102,7 @@ pub fn merge(
     debug_assert_eq!(jt_parent.len(), k);
 
     // Supernodes, in vertex order.
-    let mut node_of = vec![NONE; k];
+    let mut node_of = crate::pages::filled(k, NONE);
     let mut nodes = Vec::new();
     for c in 0..k {
         let (up, down) = (jt_up[c], st_down[c]);
@@ -119,7 +119,7 @@ pub fn merge(
     drop(candidate_vertex);
 
     // Fig. 9 on the candidates; the global minimum (candidate 0) is last.
-    let mut parent = vec![NONE; k];
+    let mut parent = crate::pages::filled(k, NONE);
     let mut leaves: Vec<u32> = (1..k as u32)
         .filter(|&c| jt_up[c as usize] + st_down[c as usize] == 1)
         .collect();
@@ -173,11 +173,11 @@ pub fn merge(
     drop(fill);
 
     // One depth-first pass: pre-order, A and B, superarc labels.
-    let mut tin = vec![0u32; k];
-    let mut tout = vec![0u32; k];
-    let mut a_of = vec![NONE; k];
-    let mut b_of = vec![NONE; k];
-    let mut label = vec![NONE; k];
+    let mut tin = crate::pages::filled(k, 0u32);
+    let mut tout = crate::pages::filled(k, 0u32);
+    let mut a_of = crate::pages::filled(k, NONE);
+    let mut b_of = crate::pages::filled(k, NONE);
+    let mut label = crate::pages::filled(k, NONE);
     // Superarcs as (end towards the root, end away from it), candidates.
     let mut ends: Vec<(u32, u32)> = Vec::new();
     let mut path: Vec<u32> = Vec::new();

@@ -301,10 +301,10 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     debug_assert!(BLOCKED || (lo == 0 && block.hi as usize == n));
     // uf[c]: ROOT | last node of the component at a root, otherwise the
     // parent in the union-find forest.
-    let mut uf = vec![NONE; nodes];
-    let mut rank = vec![0u8; nodes];
-    let mut parent = vec![NONE; nodes];
-    let mut children = vec![0u8; nodes];
+    let mut uf = crate::pages::filled(nodes, NONE);
+    let mut rank = crate::pages::filled(nodes, 0u8);
+    let mut parent = crate::pages::filled(nodes, NONE);
+    let mut children = crate::pages::filled(nodes, 0u8);
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
