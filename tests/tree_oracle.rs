@@ -237,21 +237,12 @@ fn sweep_trees_both_ways<M: Mesh>(
         sweep::split_tree(mesh, values, &codes, candidates, order, &p).expect("not cancelled"),
     );
     // The words seeded with the codes, as the engine makes them.
-    let (join_words, split_words, counted) = sweep::link_words(mesh, values);
-    assert_eq!(counted, candidates);
-    assert!(join_words.iter().zip(&codes).all(|(&w, &c)| w == c as u32));
-    assert_eq!(join_words, split_words);
-    let ((join, _), (split, _)) = blocks::sweep_trees(
-        mesh,
-        values,
-        join_words,
-        split_words,
-        candidates,
-        order,
-        cuts,
-        &p,
-    )
-    .expect("not cancelled");
+    let words = sweep::link_words(mesh, values);
+    assert_eq!(words.candidates, candidates);
+    assert!(words.join.iter().zip(&codes).all(|(&w, &c)| w == c as u32));
+    assert_eq!(words.join, words.split);
+    let ((join, _), (split, _)) =
+        blocks::sweep_trees(mesh, values, words, order, cuts, &p).expect("not cancelled");
     (whole, (join, split))
 }
 

@@ -67,7 +67,8 @@
 //! vertices on smooth fields.
 
 use super::sweep::{
-    self, Block, BlockTree, CANDIDATE, JoinTree, NONE, ROOT, SplitTree, SweepTree, find, union,
+    self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
+    union,
 };
 use crate::field::VertexOrder;
 use crate::mesh::Mesh;
@@ -101,19 +102,22 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// The join and split trees of the whole mesh, computed in the blocks
 /// `cuts` defines (`cuts[0] = 0 < cuts[1] < ... = n`) and glued, with the
 /// time each took. Identical to [`sweep::join_tree`] and
-/// [`sweep::split_tree`]. `join_words` and `split_words` are the sweeps'
-/// words seeded with the link codes ([`sweep::link_words`]).
+/// [`sweep::split_tree`]. `words` are the sweeps' words seeded with the
+/// link codes ([`sweep::link_words`]).
 pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
-    mut join_words: Vec<u32>,
-    mut split_words: Vec<u32>,
-    candidates: usize,
+    words: LinkWords,
     order: &[u32],
     cuts: &[u32],
     progress: &Progress,
 ) -> Result<SweptTrees, Cancelled> {
     let n = mesh.num_vertices();
+    let LinkWords {
+        join: mut join_words,
+        split: mut split_words,
+        candidates,
+    } = words;
     assert!(
         cuts.first() == Some(&0)
             && cuts.last() == Some(&(n as u32))

@@ -281,21 +281,14 @@ impl ContourTree {
         }
         progress.stage("join and split trees");
         let t = Instant::now();
-        let (join_words, split_words, candidates) = sweep::link_words(mesh, values);
+        let words = sweep::link_words(mesh, values);
+        let candidates = words.candidates;
         times.links = t.elapsed();
         if let Some(available) = crate::field::io::available_memory() {
             check_memory(mesh.num_vertices(), candidates, available)?;
         }
-        let ((mut join, tj), (mut split, ts)) = blocks::sweep_trees(
-            mesh,
-            values,
-            join_words,
-            split_words,
-            candidates,
-            order,
-            cuts,
-            progress,
-        )?;
+        let ((mut join, tj), (mut split, ts)) =
+            blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
         progress.check(0, 1)?;
         times.join = tj;
         times.split = ts;

@@ -506,14 +506,22 @@ pub(crate) fn prefetch<T>(data: &[T], i: usize) {
     let _ = (data, i);
 }
 
-/// The two sweeps' words seeded with every vertex's link code (the same
+/// The two sweeps' words, seeded with every vertex's link code (the same
 /// code in both; see the module documentation), and the number of
-/// candidates: [`link_codes`] without an array of codes, 64 Ki vertices
-/// at a time on every core.
-pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(
-    mesh: &M,
-    values: &O,
-) -> (Vec<u32>, Vec<u32>, usize) {
+/// candidates.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LinkWords {
+    /// The join sweep's words.
+    pub join: Vec<u32>,
+    /// The split sweep's words.
+    pub split: Vec<u32>,
+    /// The candidate nodes among the vertices.
+    pub candidates: usize,
+}
+
+/// [`LinkWords`]: [`link_codes`] without an array of codes, 64 Ki
+/// vertices at a time on every core.
+pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> LinkWords {
     const CHUNK: usize = 1 << 16;
     let n = mesh.num_vertices();
     let mut join = crate::pages::filled(n, 0u32);
@@ -535,7 +543,11 @@ pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(
             count
         })
         .sum();
-    (join, split, candidates)
+    LinkWords {
+        join,
+        split,
+        candidates,
+    }
 }
 
 /// Summaries of every vertex's upper link (low nibble) and lower link (high
