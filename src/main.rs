@@ -46,6 +46,7 @@ fn no_display() -> bool {
 }
 
 fn main() {
+    flexiso::pages::return_freed_arrays();
     let cli = Cli::parse();
     cli::set_quiet(cli.quiet);
     if matches!(cli.command, None | Some(Command::Open(_))) && no_display() {

@@ -181,7 +181,12 @@ pub fn report(volume: &Volume, bins: usize) -> String {
 fn tree_memory(f: &ScalarField) -> (usize, u64) {
     let mesh = f.mesh();
     let candidates = crate::with_values!(f.values(), v => crate::tree::sweep::count_candidates_of(&mesh, v.as_slice()));
-    (candidates, crate::tree::peak_bytes(f.len(), candidates))
+    let counting = crate::field::sorts_by_counting(f.values());
+    let remade = crate::tree::remakes_order(f.len(), candidates, counting);
+    (
+        candidates,
+        crate::tree::peak_bytes(f.len(), candidates, remade),
+    )
 }
 
 /// A bin edge: integral values without decimals, others with four.

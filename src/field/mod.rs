@@ -19,7 +19,7 @@ pub mod source;
 pub mod synthetic;
 
 pub use geometry::{Geometry, GeometryError, Space};
-pub use order::vertex_order;
+pub use order::{sorts_by_counting, vertex_order};
 
 use thiserror::Error;
 

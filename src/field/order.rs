@@ -33,6 +33,16 @@ pub fn vertex_order(values: &Values) -> Vec<u32> {
     }
 }
 
+/// True when [`vertex_order`] is a counting sort for these values (8- and
+/// 16-bit types): O(n), and no scratch beyond the order itself but one
+/// count per value and chunk.
+pub fn sorts_by_counting(values: &Values) -> bool {
+    matches!(
+        values,
+        Values::U8(_) | Values::I8(_) | Values::U16(_) | Values::I16(_)
+    )
+}
+
 /// Maps an f32 to a u32 whose unsigned order is the float order, with -0.0
 /// and 0.0 mapped to the same key (they are equal values).
 #[inline]

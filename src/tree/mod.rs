@@ -14,7 +14,7 @@
 //! divide and conquer of Pascucci and Cole-McLaughlin).
 //!
 //! **Memory per vertex** (n vertices, beyond the field's own values): 12
-//! bytes at the peak. The float sort holds 12 ((value, id) pairs and the
+//! bytes at the peak, plus the candidates' share below. The float sort holds 12 ((value, id) pairs and the
 //! order); the sweeps 12 (order 4, and each sweep's one word per vertex,
 //! 4, which holds the vertex's link code until the sweep visits it: the
 //! union-find lives on the candidates); merge and placement 12 (order and
@@ -23,7 +23,12 @@
 //! bytes each during the sweeps and about 88 at the merge's peak
 //! ([`peak_bytes`]): little on smooth fields (a few per cent of the
 //! vertices), but on noisy scans (tooth 31 %) and white noise, where half
-//! the vertices are candidates, the peak is then 30-55 bytes per vertex. [`check_memory`] refuses a
+//! the vertices are candidates, the peak is then 30-55 bytes per vertex.
+//! So when the merge is the peak by far and the order is cheap to make
+//! again (8- and 16-bit values: a counting sort in O(n), most scans),
+//! [`ContourTree::from_field`] lets the order go before the merge and
+//! sorts again before the placement ([`remakes_order`]): the merge then
+//! holds 8 bytes per vertex, not 12. [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted. The
 //! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
 //! O(supernodes).
@@ -194,18 +199,37 @@ impl From<Cancelled> for BuildError {
 /// per vertex and 24 per candidate while sweeping, 12 per vertex and 88
 /// per candidate at the merge (its tables and the tree it builds; fitted
 /// to the peaks `flexiso bench` measures on tooth, engine, the brains and
-/// aneurism, within 5 %).
-pub fn peak_bytes(n: usize, candidates: usize) -> u64 {
+/// aneurism, within 5 %), or 8 per vertex there when the order is made
+/// again after the merge (`order_remade`, see [`remakes_order`]).
+pub fn peak_bytes(n: usize, candidates: usize, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    12 * n + 88 * k
+    if order_remade {
+        (12 * n + 24 * k).max(8 * n + 88 * k)
+    } else {
+        12 * n + 88 * k
+    }
+}
+
+/// True when a build lets the vertex order go during the merge and sorts
+/// again after it: the order is a counting sort (`counting`: 8- and
+/// 16-bit values, O(n)) and the candidates are at least 1/64 of the
+/// vertices, so that the merge's 64 bytes per candidate beyond the
+/// sweeps' make it the peak by at least one byte per vertex.
+pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
+    counting && candidates as u64 * 64 >= n as u64
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
 /// once the vertex order and the link codes in the sweeps' words (12 bytes
 /// per vertex, already held) are counted back in: a clear error instead of an allocation failure
 /// halfway through, on volumes that are large *and* noisy.
-pub fn check_memory(n: usize, candidates: usize, available: u64) -> Result<(), BuildError> {
-    let needed = peak_bytes(n, candidates);
+pub fn check_memory(
+    n: usize,
+    candidates: usize,
+    order_remade: bool,
+    available: u64,
+) -> Result<(), BuildError> {
+    let needed = peak_bytes(n, candidates, order_remade);
     let available = available.saturating_add(12 * n as u64);
     if needed > available {
         return Err(BuildError::OutOfMemory {
@@ -216,6 +240,31 @@ pub fn check_memory(n: usize, candidates: usize, available: u64) -> Result<(), B
         });
     }
     Ok(())
+}
+
+/// The vertex order a build sweeps in.
+enum OrderSource<'a> {
+    /// The caller's, held for the whole build.
+    Borrowed(&'a [u32]),
+    /// The build's own, with a way to make it again if it may be let go
+    /// during the merge ([`remakes_order`]).
+    Owned(Vec<u32>, Option<&'a (dyn Fn() -> Vec<u32> + Sync)>),
+}
+
+impl OrderSource<'_> {
+    fn order(&self) -> &[u32] {
+        match self {
+            OrderSource::Borrowed(order) => order,
+            OrderSource::Owned(order, _) => order,
+        }
+    }
+
+    /// Frees an owned order (until it is made again).
+    fn let_go(&mut self) {
+        if let OrderSource::Owned(order, _) = self {
+            *order = Vec::new();
+        }
+    }
 }
 
 impl ContourTree {
@@ -242,8 +291,11 @@ impl ContourTree {
         let sort = t.elapsed();
         let mesh = field.mesh();
         let cuts = blocks::even_cuts(field.len(), blocks);
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_in_blocks(&mesh, v.as_slice(), &order, &cuts, progress))?;
-        times.sort = sort;
+        let remake = || field.vertex_order();
+        let counting = crate::field::sorts_by_counting(field.values());
+        let source = OrderSource::Owned(order, counting.then_some(&remake));
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, progress))?;
+        times.sort += sort;
         Ok((tree, times))
     }
 
@@ -271,6 +323,19 @@ impl ContourTree {
         cuts: &[u32],
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
+        Self::build_from(mesh, values, OrderSource::Borrowed(order), cuts, progress)
+    }
+
+    /// [`Self::build_in_blocks`] with the order borrowed or owned: an owned
+    /// order that can be made again may be let go during the merge.
+    fn build_from<M: Mesh, O: VertexOrder + ?Sized>(
+        mesh: &M,
+        values: &O,
+        mut source: OrderSource<'_>,
+        cuts: &[u32],
+        progress: &Progress,
+    ) -> Result<(Self, BuildTimes), BuildError> {
+        let order = source.order();
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
         let mut times = BuildTimes::default();
         if order.is_empty() {
@@ -284,8 +349,16 @@ impl ContourTree {
         let words = sweep::link_words(mesh, values);
         let candidates = words.candidates;
         times.links = t.elapsed();
+        let n = mesh.num_vertices();
+        // An owned order comes with a remake only where it is a counting sort.
+        let remake = match &source {
+            OrderSource::Owned(_, Some(remake)) if remakes_order(n, candidates, true) => {
+                Some(*remake)
+            }
+            _ => None,
+        };
         if let Some(available) = crate::field::io::available_memory() {
-            check_memory(mesh.num_vertices(), candidates, available)?;
+            check_memory(n, candidates, remake.is_some(), available)?;
         }
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
@@ -298,11 +371,20 @@ impl ContourTree {
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         let join_leafward = std::mem::take(&mut join.0.leafward);
         let split_leafward = std::mem::take(&mut split.0.leafward);
+        if remake.is_some() {
+            source.let_go();
+        }
         let merged = merge::merge(join, split, candidate_vertex, progress)?;
         times.merge = t.elapsed();
+        if let Some(remake) = remake {
+            progress.stage("sort");
+            let t = Instant::now();
+            source = OrderSource::Owned(remake(), None);
+            times.sort += t.elapsed();
+        }
         progress.stage("augment");
         let t = Instant::now();
-        let tree = merge::augment(merged, join_leafward, split_leafward, order);
+        let tree = merge::augment(merged, join_leafward, split_leafward, source.order());
         times.augment = t.elapsed();
         Ok((tree, times))
     }
@@ -493,17 +575,19 @@ mod tests {
         let gib = 1u64 << 30;
         let n = 1usize << 30; // 1024^3
         // A scan or smooth field (2 % candidates): 13.8 bytes per vertex.
-        assert!(check_memory(n, n / 50, 16 * gib).is_ok());
-        // The same volume noisy (28 % candidates) on the same machine.
+        assert!(check_memory(n, n / 50, false, 16 * gib).is_ok());
+        // The same volume noisy (28 % candidates) on the same machine,
+        // the order held through the merge or not: 36.6 or 32.6 bytes.
         let noisy = n * 28 / 100;
-        let e = check_memory(n, noisy, 16 * gib).expect_err("refused");
+        assert!(check_memory(n, noisy, true, 16 * gib).is_err());
+        let e = check_memory(n, noisy, false, 16 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
         else {
             panic!("refused for memory")
         };
-        assert_eq!(needed, peak_bytes(n, noisy));
+        assert_eq!(needed, peak_bytes(n, noisy, false));
         assert_eq!(available, 16 * gib + 12 * n as u64);
         assert!(
             needed > 23 * gib,
@@ -513,9 +597,24 @@ mod tests {
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
         // Exactly at the limit is allowed, a byte more is not.
-        let peak = peak_bytes(1000, 10);
-        assert!(check_memory(1000, 10, peak - 12_000).is_ok());
-        assert!(check_memory(1000, 10, peak - 12_001).is_err());
+        let peak = peak_bytes(1000, 10, false);
+        assert!(check_memory(1000, 10, false, peak - 12_000).is_ok());
+        assert!(check_memory(1000, 10, false, peak - 12_001).is_err());
+    }
+
+    #[test]
+    fn the_order_is_let_go_only_where_it_lowers_the_peak() {
+        let n = 1_000_000;
+        // Smooth fields and floats keep it; counting sorts with many
+        // candidates let it go, and the peak drops by up to 4 bytes.
+        assert!(!remakes_order(n, n / 100, true));
+        assert!(!remakes_order(n, n / 4, false));
+        assert!(remakes_order(n, n / 64, true));
+        for k in [n / 64, n / 16, n / 4, n / 2] {
+            let (held, remade) = (peak_bytes(n, k, false), peak_bytes(n, k, true));
+            assert!(remade < held, "{k}");
+            assert!(held - remade <= 4 * n as u64, "{k}");
+        }
     }
     use crate::field::Values;
     use proptest::prelude::*;
