@@ -269,10 +269,10 @@ pub(super) struct BlockTree {
 /// One sweep of `block` (descending for the join tree, ascending for the
 /// split tree) on the edges inside it, with `nodes` nodes (its candidates
 /// and band). `leafward` is the block's part of the per-vertex word
-/// (`leafward[v - lo]`), which holds the link code of every vertex not yet
-/// visited (see the module documentation). `values` gives the vertex order; testing "already
-/// swept" on it rather than on the union-find keeps the hot loop in the
-/// compact value array. Only a `report`ing sweep sets the progress
+/// (`leafward[v - lo]`), which holds the link code of every vertex not
+/// yet visited (see the module documentation). `values` gives the vertex
+/// order; testing "already swept" on it rather than on the union-find
+/// keeps the hot loop in the compact value array. Only a `report`ing sweep sets the progress
 /// fraction; every sweep stops when it is cancelled.
 ///
 /// The union-find is over the nodes only: a vertex's one word is
