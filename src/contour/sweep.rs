@@ -874,7 +874,7 @@ fn sweep_one<T: Scalar>(
     else {
         return Ok(None);
     };
-    let mut indices = vec![0u32; layer_start[nz - 1] as usize];
+    let mut indices = crate::pages::filled(layer_start[nz - 1] as usize, 0u32);
     let layers = nz - 1;
     let slabs = layers.min(4 * rayon::current_num_threads()).max(1);
     let cut: Vec<usize> = (0..=slabs).map(|s| s * layers / slabs).collect();
@@ -949,9 +949,9 @@ fn sweep_one<T: Scalar>(
 
     // Positions, gradients and face flags of the kept vertices only; the
     // union-find becomes the map from old ids to new (or DROPPED).
-    let mut positions = vec![[0f32; 3]; kept];
-    let mut downhill = vec![[0f32; 3]; kept];
-    let mut on_face = vec![false; kept];
+    let mut positions = crate::pages::filled(kept, [0f32; 3]);
+    let mut downhill = crate::pages::filled(kept, [0f32; 3]);
+    let mut on_face = crate::pages::filled(kept, false);
     let kept_lengths = || kept_per_plane.iter().copied();
     split_lengths(&mut parent[..], plane_lengths.iter().copied())
         .into_par_iter()
@@ -1017,7 +1017,7 @@ fn sweep_one<T: Scalar>(
 
     // Area-weighted normals: a slab's inner layers touch its own vertices
     // only (in parallel), its last layer the next slab's too (after).
-    let mut normals = vec![[0f32; 3]; kept];
+    let mut normals = crate::pages::filled(kept, [0f32; 3]);
     let slab_kept = (0..slabs).map(|s| (new_base[end_plane(s)] - new_base[cut[s]]) as usize);
     split_lengths(&mut normals, slab_kept)
         .into_par_iter()
