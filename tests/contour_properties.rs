@@ -5,7 +5,7 @@
 use flexiso::contour::oracle::{all_contours_by_following, marching_tetrahedra};
 use flexiso::contour::topology::triangle_area;
 use flexiso::contour::{
-    ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, all_contours,
+    ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, SweepCost, all_contours,
     contours_through, path_seed, path_seed_in_chain,
 };
 use flexiso::field::{Isovalue, ScalarField, Values};
@@ -509,6 +509,39 @@ proptest! {
             assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}"));
             let t = MeshTopology::of(&got.positions, &got.indices);
             prop_assert_eq!(t.euler, betti.at(ArcId(arc), &field, iso).euler);
+        }
+    }
+
+    /// A drag step's size hint (what `extract_expecting` is told) only
+    /// chooses the path: tiny (the flood), just past where the sweep may
+    /// win (the isosurface counted, then mostly followed) and huge (counted,
+    /// then swept, the sweep skipping its first pass) all give the
+    /// follower's contour, on two threads as on a 2-core machine.
+    #[test]
+    fn a_size_hint_never_changes_the_contour(
+        dims in (3usize..12, 3usize..12, 3usize..12),
+        seed in any::<u64>(),
+        t in 0.0f64..1.0,
+    ) {
+        let field = noisy_field(dims, seed);
+        let tree = tree_of(&field);
+        let iso = Isovalue::new(t);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
+        let cost = SweepCost { voxels: field.len(), threads: 2 };
+        let first = (1..).find(|&e| cost.sweep_may_win(e)).expect("some size");
+        let mut oracle = ContourFollower::new(&field);
+        let mut fast = ContourFollower::new(&field);
+        for arc in 0..tree.arcs().len() as u32 {
+            let Some(seed) = path_seed(&tree, &field, ArcId(arc), iso) else {
+                continue;
+            };
+            let want = oracle.follow(&seed, iso);
+            for hint in [None, Some(1), Some(first), Some(1 << 40)] {
+                let got = pool
+                    .install(|| fast.extract_expecting(&seed, iso, hint, &|| false))
+                    .expect("not cancelled");
+                assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}, hint {hint:?}"));
+            }
         }
     }
 

@@ -40,7 +40,7 @@
 
 pub use super::marching::{Cancelled, IdBuildHasher, IdHasher, gradient_normals, vertex_normals};
 use super::marching::{TetTables, corner, edge_fraction};
-use super::sweep::{SweepScratch, contour_by_sweep};
+use super::sweep::{SweepScratch, contour_by_sweep, isosurface_triangles};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
@@ -61,21 +61,61 @@ struct TetRef {
 /// flood emit before it hands the contour to the parallel sweep.
 pub const SERIAL_TRIANGLES: usize = 60_000;
 
-/// How many triangles the serial flood should emit before the parallel
-/// sweep would have been faster, for a volume of `voxels` on `threads`
-/// cores. Measured on colin27_ch2 (`cargo bench --bench contour`, CPU
-/// time of all threads): following costs about 125 ns of CPU per
-/// triangle, the sweep about 40 ns per voxel plus 47 ns per triangle of
-/// the whole isosurface, spread over the cores. Taking the isosurface to
-/// be the contour (the sweep's best case), the two meet at
-/// `t = 40 V / (125 P - 47)`: a fifth of the voxels on 2 cores, a fiftieth
-/// on 16.
+/// How many triangles the serial flood emits, for a contour of unknown
+/// size, before it hands over to the parallel sweep, for a volume of
+/// `voxels` on `threads` cores: `t = 40 V / (125 P - 47)`, a fifth of the
+/// voxels on 2 cores, a fiftieth on 16. This is deliberately later than
+/// the point where the sweep of a contour that is the whole isosurface
+/// would be faster ([`SweepCost`]): a small contour beside a large one
+/// (the ventricles at the scalp's isovalue) must not pay for the whole
+/// isosurface. A contour whose size is known (a drag step) is sent the
+/// cheaper way by [`SweepCost`] instead.
 pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
         return usize::MAX;
     }
     let t = 40.0 * voxels as f64 / (125.0 * threads as f64 - 47.0);
     (t as usize).max(SERIAL_TRIANGLES)
+}
+
+/// What following a contour and sweeping for it cost, in nanoseconds of
+/// wall time. Measured on colin27_ch2 and colin27_ch2better at seven
+/// isovalues each (2026-12-03, release, 2 threads, CPU time of all
+/// threads): following costs 96-171 ns per triangle on one thread, the
+/// sweep about 5 ns per voxel plus 57-80 ns per triangle of the whole
+/// isosurface, spread over the cores.
+#[derive(Clone, Copy, Debug)]
+pub struct SweepCost {
+    /// Voxels of the volume.
+    pub voxels: usize,
+    /// Worker threads.
+    pub threads: usize,
+}
+
+impl SweepCost {
+    const FOLLOW_NS: f64 = 115.0;
+    const VOXEL_NS: f64 = 5.0;
+    const ISOSURFACE_NS: f64 = 65.0;
+
+    /// Following a contour of `triangles`.
+    pub fn follow(&self, triangles: usize) -> f64 {
+        Self::FOLLOW_NS * triangles as f64
+    }
+
+    /// Sweeping for one contour where the whole isosurface has
+    /// `isosurface` triangles.
+    pub fn sweep(&self, isosurface: usize) -> f64 {
+        (Self::VOXEL_NS * self.voxels as f64 + Self::ISOSURFACE_NS * isosurface as f64)
+            / self.threads.max(1) as f64
+    }
+
+    /// True when a contour of `triangles` may be cheaper to sweep for:
+    /// the sweep's cost at its least (the isosurface being that contour
+    /// alone) is below following it. Below this, counting the isosurface
+    /// is not worth its pass.
+    pub fn sweep_may_win(&self, triangles: usize) -> bool {
+        self.threads >= 2 && self.sweep(triangles) < self.follow(triangles)
+    }
 }
 
 /// Tetrahedra the flood visits between two cancel checks.
@@ -260,9 +300,13 @@ impl<'f> ContourFollower<'f> {
     }
 
     /// [`ContourFollower::extract`] told how many triangles the contour
-    /// had a moment ago (the last drag step): one expected past the serial
-    /// limit goes straight to the sweep, without a flood given up on the
-    /// way. Only the path taken depends on `expected`, never the mesh.
+    /// had a moment ago (the last drag step). When the sweep could be the
+    /// cheaper way for that size, the whole isosurface is counted first
+    /// (the sweep's first pass, which it then skips) and [`SweepCost`]
+    /// chooses: a large contour that is most of the isosurface goes
+    /// straight to the sweep, a large one beside a larger isosurface is
+    /// followed. Only the path taken depends on `expected`, never the
+    /// mesh.
     pub fn extract_expecting(
         &mut self,
         seed: &PathSeed,
@@ -279,13 +323,32 @@ impl<'f> ContourFollower<'f> {
             Some(l) => l,
             None => serial_limit(self.field.len(), threads),
         };
-        if expected.is_none_or(|e| e <= limit)
+        let cost = SweepCost {
+            voxels: self.field.len(),
+            threads,
+        };
+        // A size known from a moment ago: the cheaper way, judged with the
+        // whole isosurface counted (a pass the sweep then skips).
+        let mut marked = false;
+        // How far to flood first (None: straight to the sweep).
+        let flood = match expected {
+            Some(e) if self.serial_limit.is_none() && cost.sweep_may_win(e) => {
+                let isosurface = isosurface_triangles(self.field, iso, &mut self.sweep);
+                marked = true;
+                let sweep = cost.sweep(isosurface);
+                // Followed, but not much past what the sweep would cost.
+                (sweep >= cost.follow(e)).then_some((sweep / SweepCost::FOLLOW_NS) as usize)
+            }
+            Some(e) if e > limit => None,
+            _ => Some(limit),
+        };
+        if let Some(limit) = flood
             && let Some(mesh) = self.follow_within(seed, iso, limit, cancel)?
         {
             return Ok(mesh);
         }
         self.reset();
-        match contour_by_sweep(self.field, seed, iso, &mut self.sweep, cancel)? {
+        match contour_by_sweep(self.field, seed, iso, &mut self.sweep, marked, cancel)? {
             Some(mesh) => Ok(mesh),
             // Beyond the sweep's u32 ids: the flood has no such limit.
             None => Ok(self

@@ -54,7 +54,8 @@
 //! label) and two dense tables of one plane per worker.
 
 use super::marching::{
-    Cancelled, TetTables, area_normal, downhill, edge_fraction, normalize, prefer_gradient,
+    Cancelled, TetTables, area_normal, edge_fraction, end_gradient, interpolated_downhill,
+    normalize, prefer_gradient,
 };
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
@@ -79,6 +80,11 @@ struct SweepTables {
     pieces: [[([[CornerEdge; 3]; 2], u8); 16]; 6],
     /// Triangles in a cube, per cube mask.
     triangles: [u8; 256],
+    /// Per cube mask, pairs of the cube's contour vertices (as corner
+    /// edges) whose unions connect them as the cube's triangles do: a
+    /// spanning forest, one union per vertex beyond the first of each
+    /// piece, instead of two per triangle.
+    links: [([(CornerEdge, CornerEdge); 18], u8); 256],
 }
 
 impl SweepTables {
@@ -113,10 +119,41 @@ impl SweepTables {
                     .map(|p| pieces[p][tet_mask[p][cube] as usize].1)
                     .sum()
             });
+            let links = std::array::from_fn(|cube| {
+                // Union-find over the cube's 64 corner edges (corner * 8 +
+                // offset), joined along each tetrahedron's triangles.
+                let mut root: [u8; 64] = std::array::from_fn(|k| k as u8);
+                let find = |root: &[u8; 64], mut k: u8| {
+                    while root[k as usize] != k {
+                        k = root[k as usize];
+                    }
+                    k
+                };
+                let mut out = ([((0u8, 0u8), (0u8, 0u8)); 18], 0u8);
+                for (p, tet_masks) in tet_mask.iter().enumerate() {
+                    let (tris, count) = &pieces[p][tet_masks[cube] as usize];
+                    let corners = tris[..*count as usize].iter().flatten();
+                    let mut first: Option<CornerEdge> = None;
+                    for &(c, d) in corners {
+                        let Some(f) = first else {
+                            first = Some((c, d));
+                            continue;
+                        };
+                        let (a, b) = (find(&root, f.0 * 8 + f.1), find(&root, c * 8 + d));
+                        if a != b {
+                            root[a.max(b) as usize] = a.min(b);
+                            out.0[out.1 as usize] = (f, (c, d));
+                            out.1 += 1;
+                        }
+                    }
+                }
+                out
+            });
             SweepTables {
                 tet_mask,
                 pieces,
                 triangles,
+                links,
             }
         })
     }
@@ -231,10 +268,10 @@ fn sweep<T: Scalar>(
         .zip(split_lengths(&mut on_face, lengths()))
         .zip(split_lengths(&mut normals, lengths()))
         .enumerate()
-        .for_each(|(z, (((p, g), f), n))| {
+        .for_each_init(EndGradients::default, |ends, (z, (((p, g), f), n))| {
             n.fill([0.0; 3]);
             let rows = &active[ny * z..][..ny];
-            crossed_edges(values, field, &cubes, rows, iso, z, |_| true, p, g, f)
+            crossed_edges(values, field, &cubes, rows, iso, z, |_| true, p, g, f, ends)
         });
 
     // 2. Triangles, counted per cube layer, then written slab by slab.
@@ -262,7 +299,15 @@ fn sweep<T: Scalar>(
         .zip(split_lengths(&mut indices, slab_indices))
         .enumerate()
         .for_each(|(s, ((parent, normals), indices))| {
-            let written = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start, &|| false);
+            let mut ids = PlaneIds::default();
+            let written = ctx.march_slab(
+                cut[s]..cut[s + 1],
+                indices,
+                &layer_start,
+                &|| false,
+                &mut ids,
+                None,
+            );
             debug_assert_eq!(written, Some(indices.len()), "triangles as counted");
             // 3. Unions inside the slab: all but the last layer, whose
             // triangles reach the next slab's first plane.
@@ -595,10 +640,13 @@ fn crossed_edges<T: Scalar>(
     positions: &mut [[f32; 3]],
     downhill_out: &mut [[f32; 3]],
     on_face: &mut [bool],
+    ends: &mut EndGradients,
 ) {
     let dims = field.dims();
     let [nx, ny, _] = dims;
     let spacing = field.spacing();
+    let inverse = spacing.map(f64::recip);
+    ends.fit(dims);
     let mut i = 0;
     let mut edge = 0;
     // `active` holds the plane's `ny` rows.
@@ -633,8 +681,8 @@ fn crossed_edges<T: Scalar>(
                     let (pb, pa) = (cb[k] as f64, ca[k] as f64);
                     ((pb + s * (pa - pb)) * spacing[k]) as f32
                 });
-                downhill_out[i] =
-                    downhill(values, dims, spacing, (b, cb), (a, ca), s).unwrap_or([0.0; 3]);
+                let (gb, ga) = (ends.at(values, dims, b, cb), ends.at(values, dims, a, ca));
+                downhill_out[i] = interpolated_downhill(gb, ga, s, inverse).unwrap_or([0.0; 3]);
                 on_face[i] = (0..3).any(|k| step[k] == 0 && (cv[k] == 0 || cv[k] + 1 == dims[k]));
                 i += 1;
             }
@@ -653,13 +701,19 @@ impl Sweep<'_> {
         out: &mut [u32],
         layer_start: &[u32],
         cancel: &(dyn Fn() -> bool + Sync),
+        ids: &mut PlaneIds,
+        mut unions: Option<Unions>,
     ) -> Option<usize> {
         let [nx, ny, _] = self.dims;
         let plane = nx * ny;
         let tables = SweepTables::get();
-        let mut lower = vec![0u32; plane * 8];
-        let mut upper = vec![0u32; plane * 8];
-        self.fill_ids(&mut upper, layers.start);
+        for t in ids.iter_mut() {
+            if t.len() != plane * 8 {
+                *t = vec![0u32; plane * 8];
+            }
+        }
+        let [lower, upper] = ids;
+        self.fill_ids(upper, layers.start);
         let offset = layer_start[layers.start] as usize;
         let mut w = 0;
         for z in layers {
@@ -667,8 +721,8 @@ impl Sweep<'_> {
                 return None;
             }
             debug_assert_eq!(w + offset, layer_start[z] as usize);
-            std::mem::swap(&mut lower, &mut upper);
-            self.fill_ids(&mut upper, z + 1);
+            std::mem::swap(lower, upper);
+            self.fill_ids(upper, z + 1);
             for y in 0..ny - 1 {
                 if !self.active[y + ny * z] {
                     continue;
@@ -679,17 +733,25 @@ impl Sweep<'_> {
                         continue;
                     }
                     let xy = x + nx * y;
+                    let id = |(c, d): CornerEdge| {
+                        let c = c as usize;
+                        let at = (xy + (c & 1) + nx * (c >> 1 & 1)) * 8 + d as usize;
+                        if c & 4 == 0 { lower[at] } else { upper[at] }
+                    };
                     for p in 0..6 {
                         let mask = tables.tet_mask[p][cube] as usize;
                         let (pieces, count) = &tables.pieces[p][mask];
                         for piece in &pieces[..*count as usize] {
-                            for &(c, d) in piece {
-                                let c = c as usize;
-                                let at = (xy + (c & 1) + nx * (c >> 1 & 1)) * 8 + d as usize;
-                                let ids = if c & 4 == 0 { &lower } else { &upper };
-                                out[w] = ids[at];
+                            for &corner in piece {
+                                out[w] = id(corner);
                                 w += 1;
                             }
+                        }
+                    }
+                    if let Some(u) = unions.as_mut().filter(|u| z < u.before_layer) {
+                        let (links, count) = &tables.links[cube];
+                        for &(a, b) in &links[..*count as usize] {
+                            union(u.parent, u.first, id(a), id(b));
                         }
                     }
                 }
@@ -752,6 +814,25 @@ fn add_normal(normals: &mut [[f32; 3]], positions: &[[f32; 3]], first: u32, tri:
     }
 }
 
+/// The union-find a slab's march joins its cubes' vertices in, for the
+/// cube layers below `before_layer` (the last layer of a slab reaches the
+/// next slab's vertices: joined afterwards from its triangles).
+struct Unions<'a> {
+    parent: &'a mut [u32],
+    first: u32,
+    before_layer: usize,
+}
+
+/// Joins `a` and `b` in the union-find over `parent` (which holds the ids
+/// from `first` on; the larger root goes under the smaller).
+#[inline]
+fn union(parent: &mut [u32], first: u32, a: u32, b: u32) {
+    let (ra, rb) = (find(parent, first, a), find(parent, first, b));
+    if ra != rb {
+        parent[(ra.max(rb) - first) as usize] = ra.min(rb);
+    }
+}
+
 /// Joins the triangle's vertices in the union-find over `parent` (which
 /// holds the ids from `first` on; the larger root goes under the smaller).
 #[inline]
@@ -781,6 +862,52 @@ fn find(parent: &mut [u32], first: u32, mut x: u32) -> u32 {
     }
 }
 
+/// The field's gradient at the grid vertices of two consecutive planes,
+/// each computed once ([`end_gradient`]): a contour vertex interpolates
+/// the gradients of its edge's two ends, and a grid vertex beside the
+/// isosurface is the end of four or five crossed edges. A worker keeps one
+/// from plane to plane (plane `z + 1`'s ends are the next plane's lower
+/// ones); a slot remembers which plane filled it, so nothing is cleared.
+#[derive(Default)]
+pub(crate) struct EndGradients {
+    /// The plane (plus one) whose gradient `slot` holds; 0: none.
+    plane: Vec<u32>,
+    gradient: Vec<[f64; 3]>,
+    nx: usize,
+    area: usize,
+}
+
+impl EndGradients {
+    /// Sized for planes of `dims`.
+    fn fit(&mut self, dims: [usize; 3]) {
+        let area = dims[0] * dims[1];
+        if self.area != area || self.nx != dims[0] {
+            self.plane = vec![0; 2 * area];
+            self.gradient = vec![[0.0; 3]; 2 * area];
+            (self.nx, self.area) = (dims[0], area);
+        }
+    }
+
+    /// The gradient at grid vertex `v` (coordinates `c`), as
+    /// [`end_gradient`] gives it.
+    #[inline]
+    fn at<T: Scalar>(
+        &mut self,
+        values: &[T],
+        dims: [usize; 3],
+        v: usize,
+        c: [usize; 3],
+    ) -> [f64; 3] {
+        let slot = c[0] + self.nx * c[1] + self.area * (c[2] & 1);
+        let tag = c[2] as u32 + 1;
+        if self.plane[slot] != tag {
+            self.plane[slot] = tag;
+            self.gradient[slot] = end_gradient(values, dims, (v, c));
+        }
+        self.gradient[slot]
+    }
+}
+
 /// Tables [`contour_by_sweep`] keeps from one call to the next: a fresh
 /// page costs as much as the work done on it, and a drag asks for the
 /// same sizes again and again. Two bytes per volume vertex (side of the
@@ -792,7 +919,17 @@ pub(crate) struct SweepScratch {
     cubes: Vec<u8>,
     active: Vec<bool>,
     parent: Vec<u32>,
+    /// Per slab, its two planes' vertex-id tables.
+    plane_ids: Vec<PlaneIds>,
+    /// Per kept vertex, the downhill gradient and whether it lies on a
+    /// face of the box (longer than needed after a larger contour).
+    downhill: Vec<[f32; 3]>,
+    on_face: Vec<bool>,
 }
+
+/// The dense vertex-id tables of a cube layer's lower and upper planes
+/// (see [`Sweep::fill_ids`]).
+type PlaneIds = [Vec<u32>; 2];
 
 /// Marks a crossed edge whose vertex is not on the wanted contour.
 const DROPPED: u32 = u32::MAX;
@@ -807,26 +944,51 @@ const DROPPED: u32 = u32::MAX;
 /// does not fit the sweep's `u32` ids (the caller then follows the seed);
 /// `Err` as soon as `cancel` answers true (checked between phases and
 /// before every cube layer of every slab).
+/// `marked`: the scratch already holds the sides and cube masks of
+/// this field at `iso` ([`isosurface_triangles`] just ran).
 pub(crate) fn contour_by_sweep(
     field: &ScalarField,
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
+    marked: bool,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let dims = field.dims();
     if dims.iter().any(|&d| d < 2) {
         return Ok(None);
     }
-    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, seed, iso, scratch, cancel))
+    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, seed, iso, scratch, marked, cancel))
 }
 
+/// The number of triangles of the whole isosurface at `iso` (every
+/// contour): the sweep's first pass (one pass over the values, in
+/// parallel), whose sides and cube masks stay in `scratch` for a sweep at
+/// the same value right after (`marked`).
+pub(crate) fn isosurface_triangles(
+    field: &ScalarField,
+    iso: Isovalue,
+    scratch: &mut SweepScratch,
+) -> usize {
+    let dims = field.dims();
+    if dims.iter().any(|&d| d < 2) {
+        return 0;
+    }
+    let s = scratch;
+    crate::with_values!(field.values(), v => sides_and_cubes(v.as_slice(), dims, iso, &mut s.above, &mut s.cubes, &mut s.active));
+    count_layer_triangles(&s.cubes, &s.active, dims)
+        .iter()
+        .sum()
+}
+
+#[allow(clippy::too_many_arguments)]
 fn sweep_one<T: Scalar>(
     values: &[T],
     field: &ScalarField,
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
+    marked: bool,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
@@ -837,8 +999,13 @@ fn sweep_one<T: Scalar>(
         cubes,
         active,
         parent,
+        plane_ids,
+        downhill,
+        on_face,
     } = scratch;
-    sides_and_cubes(values, dims, iso, above, cubes, active);
+    if !marked {
+        sides_and_cubes(values, dims, iso, above, cubes, active);
+    }
     let active: &[bool] = active;
     check()?;
 
@@ -901,20 +1068,31 @@ fn sweep_one<T: Scalar>(
                 *p = ((c << 16) + k) as u32;
             }
         });
+    plane_ids.resize_with(slabs, PlaneIds::default);
     let marched: Vec<bool> = split_lengths(&mut parent[..], slab_vertices)
         .into_par_iter()
         .zip(split_lengths(&mut indices, slab_indices.iter().copied()))
+        .zip(plane_ids.par_iter_mut())
         .enumerate()
-        .map(|(s, (parent, indices))| {
-            let Some(written) = ctx.march_slab(cut[s]..cut[s + 1], indices, &layer_start, cancel)
+        .map(|(s, ((parent, indices), ids))| {
+            // The unions of every layer but a slab's last (the last slab's
+            // too), cube by cube as it is marched.
+            let unions = Unions {
+                parent,
+                first: vertex_start(cut[s]) as u32,
+                before_layer: if s + 1 == slabs {
+                    cut[s + 1]
+                } else {
+                    cut[s + 1] - 1
+                },
+            };
+            let layers = cut[s]..cut[s + 1];
+            let Some(written) =
+                ctx.march_slab(layers, indices, &layer_start, cancel, ids, Some(unions))
             else {
                 return false;
             };
             debug_assert_eq!(written, indices.len(), "triangles as counted");
-            let first = vertex_start(cut[s]) as u32;
-            for tri in indices[..inner_len(s)].chunks_exact(3) {
-                union_triangle(parent, first, tri);
-            }
             true
         })
         .collect();
@@ -950,16 +1128,20 @@ fn sweep_one<T: Scalar>(
     // Positions, gradients and face flags of the kept vertices only; the
     // union-find becomes the map from old ids to new (or DROPPED).
     let mut positions = crate::pages::filled(kept, [0f32; 3]);
-    let mut downhill = crate::pages::filled(kept, [0f32; 3]);
-    let mut on_face = crate::pages::filled(kept, false);
+    // Every kept vertex's entry is written below: no need to clear them.
+    if downhill.len() < kept {
+        *downhill = crate::pages::filled(kept, [0f32; 3]);
+        *on_face = crate::pages::filled(kept, false);
+    }
+    let (downhill, on_face) = (&mut downhill[..kept], &mut on_face[..kept]);
     let kept_lengths = || kept_per_plane.iter().copied();
     split_lengths(&mut parent[..], plane_lengths.iter().copied())
         .into_par_iter()
         .zip(split_lengths(&mut positions, kept_lengths()))
-        .zip(split_lengths(&mut downhill, kept_lengths()))
-        .zip(split_lengths(&mut on_face, kept_lengths()))
+        .zip(split_lengths(&mut *downhill, kept_lengths()))
+        .zip(split_lengths(&mut *on_face, kept_lengths()))
         .enumerate()
-        .for_each(|(z, (((map, p), g), f))| {
+        .for_each_init(EndGradients::default, |ends, (z, (((map, p), g), f))| {
             let mut next = new_base[z];
             for m in map.iter_mut() {
                 *m = if *m == root {
@@ -971,7 +1153,7 @@ fn sweep_one<T: Scalar>(
             }
             let rows = &active[ny * z..][..ny];
             let keep = |i: usize| map[i] != DROPPED;
-            crossed_edges(values, field, cubes, rows, iso, z, keep, p, g, f);
+            crossed_edges(values, field, cubes, rows, iso, z, keep, p, g, f, ends);
         });
     let map: &[u32] = parent;
     check()?;

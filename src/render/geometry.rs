@@ -124,7 +124,7 @@ impl Corners {
         if runs.len() > 1 && runs.len() * MIN_RUN_TRIANGLES > triangles {
             return Corners::Long(indices.to_vec());
         }
-        let mut short = vec![0u16; indices.len() + indices.len() % 2];
+        let mut short = crate::pages::filled(indices.len() + indices.len() % 2, 0u16);
         let write = |out: &mut [u16], from: usize| {
             // The runs within this stretch of indices.
             let first = runs.partition_point(|r| (r.end as usize) <= from);
@@ -351,7 +351,21 @@ impl PreparedMesh {
         };
         let parallel = n > PARALLEL_VERTICES;
         let vertices = if parallel {
-            positions.par_iter().zip(normals).map(quantise).collect()
+            // Written in place into huge pages: a fresh page's first touch
+            // costs as much as the quantising.
+            let mut v = crate::pages::filled(n, GpuVertex::default());
+            v.par_chunks_mut(1 << 14)
+                .zip(
+                    positions
+                        .par_chunks(1 << 14)
+                        .zip(normals.par_chunks(1 << 14)),
+                )
+                .for_each(|(out, (p, nr))| {
+                    for (o, pn) in out.iter_mut().zip(p.iter().zip(nr)) {
+                        *o = quantise(pn);
+                    }
+                });
+            v
         } else {
             positions.iter().zip(normals).map(quantise).collect()
         };
@@ -486,7 +500,11 @@ fn signed_volume(positions: &[[f32; 3]], indices: &[u32], bbox: (Vec3, Vec3)) ->
         if v.is_finite() { v } else { 0.0 }
     };
     if indices.len() > 12 * PARALLEL_VERTICES {
-        indices.par_chunks_exact(3).map(term).sum()
+        // A sum per stretch of triangles, then of the stretches.
+        indices
+            .par_chunks(3 << 12)
+            .map(|c| c.chunks_exact(3).map(term).sum::<f64>())
+            .sum()
     } else {
         indices.chunks_exact(3).map(term).sum()
     }
