@@ -24,9 +24,13 @@
 //!    case tables are the follower's, so winding and interpolation agree
 //!    triangle for triangle. Triangles are counted per layer first and
 //!    written straight into one array.
-//! 3. **Components** by union-find over triangle edges: inside a slab on
-//!    the slab's own vertices (in parallel), then the layers that join two
-//!    slabs. Linking the larger root under the smaller makes every parent
+//! 3. **Components** by union-find: inside a slab on the slab's own
+//!    vertices (in parallel), then the layers that join two slabs from
+//!    their triangles. For one contour ([`contour_by_sweep`]) a slab joins
+//!    each cube's vertices while the cube is marched, by a table per cube
+//!    mask of the unions that connect its pieces as its triangles do (a
+//!    spanning forest: one union per vertex beyond a piece's first).
+//!    Linking the larger root under the smaller makes every parent
 //!    smaller than its child, so one ascending pass labels everything.
 //! 4. **Arcs.** A component is the contour of the superarc whose path seed
 //!    lies on it: the seed's edge is numbered from its row's count. The
@@ -38,7 +42,8 @@
 //! a large contour): steps 1 to 3 without positions or normals, then only
 //! the component of the seed's edge is kept. Its vertices get new ids in
 //! edge order (so each slab still owns a contiguous range of them), their
-//! positions and gradients are computed plane by plane for them alone,
+//! positions and gradients are computed plane by plane for them alone
+//! (the field's gradient once per grid vertex, [`EndGradients`]),
 //! each slab compacts its own triangles in place, and the area-weighted
 //! normals are summed slab by slab as above. Cost: one pass over the
 //! volume's bytes plus every triangle at the isovalue, spread over the
