@@ -280,27 +280,24 @@ fn serial_vs_parallel(
         draws,
         (24 * m.positions.len() + 4 * m.indices.len()) as f64 / 1e6,
     );
-    let mut t_prepare = f64::INFINITY;
-    let t_ready = best_of(5, || {
-        let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
-        let m = parallel.extract(&s, iso, &|| false).expect("not cancelled");
-        let t = Instant::now();
-        black_box(prepare(&m));
-        t_prepare = t_prepare.min(t.elapsed().as_secs_f64());
-    });
-    // As in a drag: the contour's size a moment ago known, so a large one
-    // goes straight to the sweep (the cold request above first floods up
-    // to the serial limit).
-    let mut t_prepare_known = f64::INFINITY;
-    let t_ready_known = best_of(5, || {
-        let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
-        let m = parallel
-            .extract_expecting(&s, iso, Some(triangles), &|| false)
-            .expect("not cancelled");
-        let t = Instant::now();
-        black_box(prepare(&m));
-        t_prepare_known = t_prepare_known.min(t.elapsed().as_secs_f64());
-    });
+    // New isovalue to mesh ready for upload (best of 5) and the preparation
+    // alone: with its size unknown (a first click: the flood tried first up
+    // to the serial limit) or known (as in a drag, straight to the sweep).
+    let mut ready = |expected: Option<usize>| {
+        let mut t_prepare = f64::INFINITY;
+        let t_ready = best_of(5, || {
+            let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
+            let m = parallel
+                .extract_expecting(&s, iso, expected, &|| false)
+                .expect("not cancelled");
+            let t = Instant::now();
+            black_box(prepare(&m));
+            t_prepare = t_prepare.min(t.elapsed().as_secs_f64());
+        });
+        (t_ready, t_prepare)
+    };
+    let (t_ready, t_prepare) = ready(None);
+    let (t_ready_known, t_prepare_known) = ready(Some(triangles));
     println!(
         "{name} h = {}: the largest contour ({triangles} triangles), new isovalue to mesh \
          ready for upload with its size known (as in a drag): {:.0} ms (of which preparing it \

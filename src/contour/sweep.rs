@@ -842,15 +842,8 @@ fn union(parent: &mut [u32], first: u32, a: u32, b: u32) {
 /// holds the ids from `first` on; the larger root goes under the smaller).
 #[inline]
 fn union_triangle(parent: &mut [u32], first: u32, tri: &[u32]) {
-    let mut r0 = find(parent, first, tri[0]);
-    for &i in &tri[1..] {
-        let r = find(parent, first, i);
-        if r != r0 {
-            let (lo, hi) = (r.min(r0), r.max(r0));
-            parent[(hi - first) as usize] = lo;
-            r0 = lo;
-        }
-    }
+    union(parent, first, tri[0], tri[1]);
+    union(parent, first, tri[0], tri[2]);
 }
 
 /// The root of `x`, halving the path (`parent` holds ids from `first` on).
