@@ -170,7 +170,7 @@ pub fn merge(
         child[fill[p as usize] as usize] = c as u32;
         fill[p as usize] += 1;
     }
-    drop(fill);
+    drop((fill, parent));
 
     // One depth-first pass: pre-order, A and B, superarc labels.
     let mut tin = crate::pages::filled(k, 0u32);
@@ -249,7 +249,7 @@ pub fn merge(
             next_child.pop();
         }
     }
-    drop((child, first, path, next_child, inc, dec, saved, parent));
+    drop((child, first, path, next_child, inc, dec, saved));
 
     let mut arcs: Vec<Superarc> = ends
         .iter()
@@ -399,16 +399,20 @@ fn live_parent(tree_parent: &mut [u32], cut_to: &[u32], start: u32) -> u32 {
     y
 }
 
-/// Places every vertex (see the module documentation) and lays out the
-/// regular vertices of each superarc in the vertex order. `join_leafward`
+/// Every vertex placed (see the module documentation): the supernodes,
+/// the superarcs and each vertex's place, what [`group`] lays out.
+pub struct Placed {
+    nodes: Vec<Node>,
+    arcs: Vec<Superarc>,
+    vertex_arc: Vec<u32>,
+}
+
+/// Places every vertex (see the module documentation). `join_leafward`
 /// and `split_leafward` are the sweeps' per-vertex records; the first
-/// becomes the tree's `vertex_arc`.
-pub fn augment(
-    tree: CandidateTree,
-    mut join_leafward: Vec<u32>,
-    split_leafward: Vec<u32>,
-    order: &[u32],
-) -> ContourTree {
+/// becomes the tree's `vertex_arc`. Needs no vertex order: a build that
+/// let the order go makes it again only after this, when the second
+/// record and the candidates' tables are gone.
+pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: Vec<u32>) -> Placed {
     let CandidateTree {
         nodes,
         arcs,
@@ -434,8 +438,21 @@ pub fn augment(
                 };
             }
         });
-    drop((split_leafward, candidate_place, join_side, split_side));
-    let vertex_arc = join_leafward;
+    Placed {
+        nodes,
+        arcs,
+        vertex_arc: join_leafward,
+    }
+}
+
+/// Lays out the regular vertices of each superarc in the vertex `order`
+/// and assembles the tree.
+pub fn group(placed: Placed, order: &[u32]) -> ContourTree {
+    let Placed {
+        nodes,
+        arcs,
+        vertex_arc,
+    } = placed;
     let (offsets, arc_vertices) = group_by_arc(&vertex_arc, arcs.len(), order);
     ContourTree::assemble(nodes, arcs, vertex_arc, offsets, arc_vertices)
 }

@@ -27,8 +27,10 @@
 //! So when the merge is the peak by far and the order is cheap to make
 //! again (8- and 16-bit values: a counting sort in O(n), most scans),
 //! [`ContourTree::from_field`] lets the order go before the merge and
-//! sorts again before the placement ([`remakes_order`]): the merge then
-//! holds 8 bytes per vertex, not 12. [`check_memory`] refuses a
+//! sorts again after the placement, once the second leafward array and the
+//! candidates' tables are gone ([`remakes_order`]): the merge and the
+//! placement then hold 8 bytes per vertex, not 12, and the grouping 12
+//! (`vertex_arc`, the order, the arcs' vertex lists). [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted. The
 //! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
 //! O(supernodes).
@@ -376,6 +378,10 @@ impl ContourTree {
         }
         let merged = merge::merge(join, split, candidate_vertex, progress)?;
         times.merge = t.elapsed();
+        progress.stage("augment");
+        let t = Instant::now();
+        let placed = merge::place(merged, join_leafward, split_leafward);
+        times.augment = t.elapsed();
         if let Some(remake) = remake {
             progress.stage("sort");
             let t = Instant::now();
@@ -384,8 +390,8 @@ impl ContourTree {
         }
         progress.stage("augment");
         let t = Instant::now();
-        let tree = merge::augment(merged, join_leafward, split_leafward, source.order());
-        times.augment = t.elapsed();
+        let tree = merge::group(placed, source.order());
+        times.augment += t.elapsed();
         Ok((tree, times))
     }
 
