@@ -2,6 +2,7 @@
 //! counts, Euler characteristic V - E + F, boundary, manifoldness,
 //! orientation, components, genus, area and enclosed volume.
 
+use super::marching::Cancelled;
 use rayon::prelude::*;
 
 /// What an indexed triangle mesh is, combinatorially and geometrically.
@@ -41,9 +42,26 @@ impl MeshTopology {
     /// corners of its lower end: `v -> w` as a corner's next, `w -> v` as
     /// a corner's previous) and its own link, in parallel.
     pub fn of(positions: &[[f32; 3]], indices: &[u32]) -> Self {
+        Self::measure(positions, indices, &|| false).expect("nothing cancels it")
+    }
+
+    /// [`MeshTopology::of`], stopped soon after `cancel` says so: a head
+    /// surface of millions of triangles takes over half a second, which
+    /// must not hold a core that the next drag step needs. `cancel` is
+    /// asked between the passes and every few thousand triangles or
+    /// vertices within them.
+    pub fn measure(
+        positions: &[[f32; 3]],
+        indices: &[u32],
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Self, Cancelled> {
+        /// Items between two questions to `cancel`.
+        const ASK: usize = 1 << 14;
+        let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
         let n = positions.len();
         let triangles = indices.len() / 3;
         let indices = &indices[..3 * triangles];
+        check()?;
         // Corners by vertex: (previous, next) around each triangle.
         let mut start = vec![0u32; n + 1];
         for &v in indices {
@@ -52,27 +70,36 @@ impl MeshTopology {
         for i in 0..n {
             start[i + 1] += start[i];
         }
+        check()?;
         let mut fill = start.clone();
         let mut corners = vec![(0u32, 0u32); indices.len()];
-        for t in indices.chunks_exact(3) {
-            for i in 0..3 {
-                let v = t[i] as usize;
-                corners[fill[v] as usize] = (t[(i + 2) % 3], t[(i + 1) % 3]);
-                fill[v] += 1;
+        for run in indices.chunks(3 * ASK) {
+            check()?;
+            for t in run.chunks_exact(3) {
+                for i in 0..3 {
+                    let v = t[i] as usize;
+                    corners[fill[v] as usize] = (t[(i + 2) % 3], t[(i + 1) % 3]);
+                    fill[v] += 1;
+                }
             }
         }
         drop(fill);
         let per_vertex = (0..n)
             .into_par_iter()
-            .fold(VertexTally::default, |mut acc, v| {
+            .with_min_len(ASK)
+            .try_fold(VertexTally::default, |mut acc, v| {
+                if v % ASK == 0 {
+                    check()?;
+                }
                 let c = &corners[start[v] as usize..start[v + 1] as usize];
                 acc.add(v as u32, c);
-                acc
+                Ok(acc)
             })
-            .reduce(VertexTally::default, VertexTally::merge);
+            .try_reduce(VertexTally::default, |a, b| Ok(VertexTally::merge(a, b)))?;
         let (area, volume) = indices
             .par_chunks(3 * 4096)
             .map(|chunk| {
+                check()?;
                 let (mut area, mut volume) = (0f64, 0f64);
                 for tri in chunk.chunks_exact(3) {
                     let p = [0, 1, 2].map(|i| positions[tri[i] as usize].map(|c| c as f64));
@@ -84,15 +111,18 @@ impl MeshTopology {
                     ];
                     volume += (p[0][0] * c[0] + p[0][1] * c[1] + p[0][2] * c[2]) / 6.0;
                 }
-                (area, volume)
+                Ok((area, volume))
             })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+            .try_reduce(|| (0.0, 0.0), |a, b| Ok((a.0 + b.0, a.1 + b.1)))?;
         // Components through shared vertices, boundary loops through
         // boundary edges.
         let mut uf = UnionFind::new(n);
-        for t in indices.chunks_exact(3) {
-            uf.union(t[0], t[1]);
-            uf.union(t[0], t[2]);
+        for run in indices.chunks(3 * ASK) {
+            check()?;
+            for t in run.chunks_exact(3) {
+                uf.union(t[0], t[1]);
+                uf.union(t[0], t[2]);
+            }
         }
         let mut boundary = UnionFind::new(n);
         let mut boundary_vertices = Vec::with_capacity(2 * per_vertex.boundary.len());
@@ -104,7 +134,7 @@ impl MeshTopology {
         boundary_vertices.dedup();
         let used = |v: usize| start[v] < start[v + 1];
         let vertices = (0..n).filter(|&v| used(v)).count();
-        MeshTopology {
+        Ok(MeshTopology {
             vertices,
             edges: per_vertex.edges,
             triangles,
@@ -122,7 +152,7 @@ impl MeshTopology {
             euler: vertices as i64 - per_vertex.edges as i64 + triangles as i64,
             area,
             volume: volume.abs(),
-        }
+        })
     }
 
     /// Betti numbers (β0, β1, β2) of a connected surface: β2 = 1 iff
@@ -468,5 +498,40 @@ mod tests {
             (square.boundary_edges, square.boundary_loops, square.euler),
             (4, 1, 1)
         );
+    }
+
+    /// A measurement stops at whichever question to `cancel` says yes (the
+    /// first, one in the middle of a pass, the last) and is otherwise the
+    /// one [`MeshTopology::of`] makes: a strip of 2 x 100k triangles, long
+    /// enough for every pass to ask more than once.
+    #[test]
+    fn a_measurement_stops_when_cancelled() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let n = 100_000u32;
+        let positions: Vec<[f32; 3]> = (0..=n)
+            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
+            .collect();
+        let indices: Vec<u32> = (0..n)
+            .flat_map(|i| [2 * i, 2 * i + 2, 2 * i + 1, 2 * i + 1, 2 * i + 2, 2 * i + 3])
+            .collect();
+        let asked = AtomicUsize::new(0);
+        let whole = MeshTopology::measure(&positions, &indices, &|| {
+            asked.fetch_add(1, Ordering::Relaxed);
+            false
+        })
+        .expect("never cancelled");
+        assert_eq!(whole, MeshTopology::of(&positions, &indices));
+        assert_eq!((whole.euler, whole.boundary_loops), (1, 1));
+        let questions = asked.load(Ordering::Relaxed);
+        assert!(questions > 20, "asked only {questions} times");
+        for stop_at in [0, questions / 2, questions - 1] {
+            let asked = AtomicUsize::new(0);
+            let cancel = || asked.fetch_add(1, Ordering::Relaxed) >= stop_at;
+            assert_eq!(
+                MeshTopology::measure(&positions, &indices, &cancel),
+                Err(Cancelled),
+                "cancelled at question {stop_at} of {questions}"
+            );
+        }
     }
 }

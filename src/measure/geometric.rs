@@ -198,12 +198,9 @@ impl ArcRegions {
         // the arcs, on the values in their own type, so the pass over the
         // tree below reads one record per arc and no vertex.
         let regular: Vec<Regular> = crate::with_values!(field.values(), values => {
-            (0..m)
+            balanced_arc_ranges(tree)
                 .into_par_iter()
-                // One arc a task: on smooth fields a few arcs hold most
-                // vertices, and ranges of arcs would leave a core idle.
-                .with_max_len(1)
-                .map(|a| {
+                .flat_map_iter(|arcs| arcs.map(|a| {
                     let vs = tree.arc_vertices(ArcId(a as u32));
                     let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
                     let (first, last) = match (vs.first(), vs.last()) {
@@ -211,7 +208,7 @@ impl ArcRegions {
                         _ => (f64::NAN, f64::NAN),
                     };
                     Regular { count: vs.len() as u64, sum, first, last }
-                })
+                }))
                 .collect()
         });
         let (total_count, total_sum) = {
@@ -373,6 +370,40 @@ struct Regular {
     sum: f64,
     first: f64,
     last: f64,
+}
+
+/// The arcs `0..m` of `tree` cut into ranges of about equal work (a few
+/// per thread), an arc's work its regular vertices and a few more for the
+/// arc itself: on smooth fields a few arcs hold most vertices and get a
+/// range each (an arc heavier than a range's share starts the only range
+/// it is in), on white noise millions of arcs of a few vertices are shared
+/// out in large ranges instead of one task each.
+fn balanced_arc_ranges(tree: &ContourTree) -> Vec<std::ops::Range<usize>> {
+    /// An arc's own work, in vertices.
+    const ARC_WORK: u64 = 8;
+    let offsets = tree.arc_vertex_offsets();
+    let m = offsets.len() - 1;
+    let work = |a: usize| offsets[a] as u64 + ARC_WORK * a as u64;
+    let pieces = (rayon::current_num_threads() * 16).clamp(1, m.max(1)) as u64;
+    let total = work(m);
+    let mut starts: Vec<usize> = (0..pieces)
+        .map(|i| {
+            // The first arc whose work starts at or past piece i's share.
+            let (mut lo, mut hi) = (0, m);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if work(mid) * pieces < total * i {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        })
+        .collect();
+    starts.dedup();
+    starts.push(m);
+    starts.windows(2).map(|w| w[0]..w[1]).collect()
 }
 
 /// A region being combined: count, sum, min and max, one record so that

@@ -494,6 +494,13 @@ impl ContourTree {
         self.vertex_arc.len()
     }
 
+    /// Where each superarc's regular vertices start in one list of all of
+    /// them (one more entry than arcs, the last the total): for splitting
+    /// work over the arcs by the vertices they hold.
+    pub fn arc_vertex_offsets(&self) -> &[u32] {
+        &self.arc_offsets
+    }
+
     /// The regular vertices of a superarc, ascending in the vertex order
     /// (its ends, the supernodes, are not included).
     pub fn arc_vertices(&self, id: ArcId) -> &[u32] {

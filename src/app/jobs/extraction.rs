@@ -105,6 +105,11 @@ impl Extractions {
         h: f64,
     ) {
         self.to_measure.remove(&id);
+        // A measurement of the last mesh stops: the new one is measured
+        // when it arrives, and the extraction needs the cores now.
+        if let Some(job) = self.measure.get_mut(&id) {
+            job.cancel();
+        }
         let (field, tree) = (Arc::clone(field), Arc::clone(tree));
         let pool = Arc::clone(&self.scratch);
         let notify = self.notify.clone();
@@ -202,8 +207,11 @@ impl Extractions {
                 self.measure
                     .entry(id)
                     .or_insert_with(|| Job::new(notify))
-                    .start_latest("measure", move |_| {
-                        Ok((request, MeshTopology::of(&mesh.positions, &mesh.indices)))
+                    .start_latest("measure", move |progress| {
+                        let cancel = || progress.is_cancelled();
+                        MeshTopology::measure(&mesh.positions, &mesh.indices, &cancel)
+                            .map(|topology| (request, topology))
+                            .map_err(|_| JobError::Cancelled)
                     });
             }
         }
