@@ -173,9 +173,66 @@ fn quick() {
         );
         serial_vs_parallel(&name, &tree, &field, iso, &seed);
         scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
+        drag_while_measuring(&name, &field, iso, &seed);
         drag_latency(&name, &tree, &field, 150_000..=250_000);
         drag_latency(&name, &tree, &field, 500_000..=1_000_000);
     }
+}
+
+/// A drag step that resumes while the explorer measures the contour's last
+/// mesh (it does so once a drag pauses: [`MeshTopology::measure`] on
+/// another thread): new isovalue to mesh ready for upload with the
+/// measurement left to run, as before, and cancelled by the new request,
+/// as the explorer now does. Median of 3 each, alternated.
+fn drag_while_measuring(name: &str, field: &ScalarField, iso: Isovalue, seed: &PathSeed) {
+    use flexiso::contour::MeshTopology;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let mut follower = ContourFollower::new(field);
+    let last = follower
+        .extract_expecting(seed, iso, None, &|| false)
+        .expect("not cancelled");
+    let triangles = last.num_triangles();
+    let (mut left, mut cancelled, mut measuring) = (vec![], vec![], vec![]);
+    for round in 0..6 {
+        let cancel = round % 2 == 1;
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|scope| {
+            let measurement = scope.spawn(|| {
+                let t = Instant::now();
+                let done = MeshTopology::measure(&last.positions, &last.indices, &|| {
+                    stop.load(Ordering::Relaxed)
+                })
+                .is_ok();
+                (done, t.elapsed().as_secs_f64() * 1e3)
+            });
+            // The mouse moves on a moment after the measurement began.
+            std::thread::sleep(std::time::Duration::from_millis(30));
+            let t = Instant::now();
+            if cancel {
+                stop.store(true, Ordering::Relaxed);
+            }
+            let m = follower
+                .extract_expecting(seed, iso, Some(triangles), &|| false)
+                .expect("not cancelled");
+            black_box(prepare(&m));
+            let step = t.elapsed().as_secs_f64() * 1e3;
+            let (done, ms) = measurement.join().expect("measured");
+            if cancel {
+                cancelled.push(step);
+            } else {
+                assert!(done, "a measurement left to run finishes");
+                left.push(step);
+                measuring.push(ms);
+            }
+        });
+    }
+    let ((l, _), (c, _), (mm, _)) = (stats(&left), stats(&cancelled), stats(&measuring));
+    println!(
+        "{name} h = {}: a drag step of the largest contour ({triangles} triangles) resumed while \
+         its last mesh is measured ({mm:.0} ms): {l:.0} ms with the measurement left to run, \
+         {c:.0} ms with it cancelled by the new request (as the explorer does)",
+        iso.value,
+    );
 }
 
 /// The largest contour's cross-sections on the middle slice of each axis
