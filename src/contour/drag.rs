@@ -47,7 +47,7 @@
 //! vertex: about 350 MB for a 5.4 M-triangle head surface, held while one
 //! contour is dragged.
 //!
-//! **Measured, and why the explorer does not use it yet**
+//! **Measured, and where the explorer uses it**
 //! (`FLEXISO_BENCH_DRAG=1 FLEXISO_BENCH_QUICK=1 FLEXISO_BENCH_VOLUMES=colin27_ch2
 //! cargo bench --bench contour`, the 2-core machine shared with a build,
 //! load 3-4): on the colin27_ch2 head (5.4-5.7 M triangles, steps of +1
@@ -64,8 +64,11 @@
 //! by plane). On a 0.8 M-triangle contour a step costs 43-69 ms against
 //! 89-187 ms following it serially (longer steps). The next step is keeping pairs and
 //! vertices in volume order (the sweep's), so that both the change and
-//! the output stream; until then [`super::ContourFollower::extract`] stays
-//! the explorer's path.
+//! the output stream. Until then the explorer drags by a kept contour
+//! only contours of up to 1 M triangles (`app::jobs::extraction`, where
+//! the limit's measurements are: 7 ms a step at 156k triangles, 65 ms at
+//! 854k, about the sweep's at 1.4-1.8 M), and extracts larger ones afresh
+//! by [`super::ContourFollower::extract`].
 //!
 //! **Cancellation.** A step changes its state without asking (that part is
 //! short); the output passes stop when `cancel` says so, leaving the state
