@@ -178,11 +178,13 @@ pub fn ui(
                                 .weak(),
                             );
                         }
+                        // No spinner while a job runs: a spinner redraws
+                        // the window every frame, and without a GPU every
+                        // frame rasterises the 3D view on the cores the
+                        // job needs (a drag step of a 1 M-triangle contour
+                        // took 4 times as long). The job's answer redraws.
                         None if c.extracting() => {
-                            ui.horizontal(|ui| {
-                                ui.spinner();
-                                ui.label("extracting…");
-                            });
+                            ui.label("extracting…");
                         }
                         None if c.mesh.is_some() => {
                             let n = c.mesh.as_ref().map_or(0, |m| m.num_triangles());
@@ -190,7 +192,6 @@ pub fn ui(
                             // Wrapped: a long line would widen the panel
                             // and shift the 3D view.
                             ui.horizontal_wrapped(|ui| {
-                                ui.spinner();
                                 ui.label(format!(
                                     "measuring… (extracted in {})",
                                     fmt_ms(c.extract_ms)

@@ -373,13 +373,14 @@ pub fn status_bar(ui: &mut egui::Ui, s: &Status<'_>) -> Option<Action> {
                 ));
                 ui.separator();
                 ui.label(format!("ui {:.1} ms  3D {:.1} ms", s.ui_ms, s.render_ms));
+                // No spinners: one redraws the window every frame, which
+                // without a GPU rasterises the 3D view on the cores the
+                // extraction needs (see contour_list).
                 if s.extracting > 0 {
-                    ui.spinner();
-                    ui.label(format!("extracting {} contour(s)", s.extracting));
+                    ui.label(format!("extracting {} contour(s)…", s.extracting));
                 }
                 let (on, extracting, n, ms) = s.all;
                 if extracting {
-                    ui.spinner();
                     ui.label("extracting all contours at h…");
                 } else if on {
                     ui.label(format!("{n} contours at h ({ms:.0} ms)"));
