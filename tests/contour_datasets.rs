@@ -106,19 +106,6 @@ fn check_parallel_extraction(name: &str, isovalues: &[f64], min_triangles: usize
     let seeds = PathSeeds::new();
     let mut oracle = ContourFollower::new(&field);
     let mut fast = ContourFollower::new(&field).with_serial_limit(0);
-    let soup = |c: &flexiso::contour::ContourMesh| {
-        let mut s: Vec<[[u32; 3]; 3]> = c
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                let p = [0, 1, 2].map(|i| c.positions[t[i] as usize].map(f32::to_bits));
-                let k = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
-                [p[k], p[(k + 1) % 3], p[(k + 2) % 3]]
-            })
-            .collect();
-        s.sort_unstable();
-        s
-    };
     for &h in isovalues {
         let iso = Isovalue::new(h);
         let mut followed: Vec<_> = flexiso::contour::global::spanning_arcs(&tree, &field, iso)
@@ -136,7 +123,10 @@ fn check_parallel_extraction(name: &str, isovalues: &[f64], min_triangles: usize
             assert_eq!(got.positions.len(), want.positions.len(), "{at}: vertices");
             assert_eq!(got.normals.len(), got.positions.len(), "{at}: normals");
             assert_eq!(got.touches_boundary, want.touches_boundary, "{at}");
-            assert!(soup(&got) == soup(want), "{at}: the same triangles");
+            assert!(
+                got.triangle_soup() == want.triangle_soup(),
+                "{at}: the same triangles"
+            );
             let (a, b) = (
                 MeshTopology::of(&got.positions, &got.indices),
                 MeshTopology::of(&want.positions, &want.indices),

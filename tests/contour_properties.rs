@@ -100,8 +100,8 @@ fn check_all(
         );
         assert_eq!(c.touches_boundary, f.touches_boundary, "arc {:?}", c.arc);
         assert_eq!(
-            triangle_soup(c),
-            triangle_soup(f),
+            c.triangle_soup(),
+            f.triangle_soup(),
             "arc {:?} at {iso:?}: the same oriented triangles",
             c.arc
         );
@@ -134,23 +134,6 @@ fn check_all(
         "one contour per level-set component"
     );
     contours
-}
-
-/// The mesh's triangles as position triples, each rotated to start at its
-/// smallest corner (keeping its winding), sorted: equal for two meshes
-/// with the same oriented triangles whatever their vertex numbering.
-fn triangle_soup(c: &ContourMesh) -> Vec<[[u32; 3]; 3]> {
-    let mut soup: Vec<[[u32; 3]; 3]> = c
-        .indices
-        .chunks_exact(3)
-        .map(|t| {
-            let p = [0, 1, 2].map(|i| c.positions[t[i] as usize].map(f32::to_bits));
-            let k = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
-            [p[k], p[(k + 1) % 3], p[(k + 2) % 3]]
-        })
-        .collect();
-    soup.sort_unstable();
-    soup
 }
 
 /// A float32 field of `dims` with values from a xorshift of `seed`, in
@@ -337,7 +320,7 @@ proptest! {
             prop_assert_eq!(Some(seed), seeds.seed(&tree, &field, c.arc, iso));
             prop_assert!(iso.is_above(&field, seed.above) && !iso.is_above(&field, seed.below));
             let mine = follower.follow(&seed, iso);
-            prop_assert_eq!(triangle_soup(&mine), triangle_soup(c));
+            prop_assert_eq!(mine.triangle_soup(), c.triangle_soup());
         }
         for a in 0..tree.arcs().len() as u32 {
             let spans = flexiso::contour::arc_spans(&tree, &field, ArcId(a), iso);
@@ -432,8 +415,8 @@ fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
         "{at}: boundary"
     );
     assert_eq!(
-        triangle_soup(fast),
-        triangle_soup(oracle),
+        fast.triangle_soup(),
+        oracle.triangle_soup(),
         "{at}: the same oriented triangles"
     );
     let (a, b) = (

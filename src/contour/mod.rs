@@ -121,6 +121,24 @@ impl ContourMesh {
         self.indices.len() / 3
     }
 
+    /// The mesh up to the order of its vertices and triangles: each
+    /// oriented triangle by its corners' positions (their bits), turned to
+    /// start at its least corner, all sorted. Two ways of extracting a
+    /// contour give the same mesh when these are equal.
+    pub fn triangle_soup(&self) -> Vec<[[u32; 3]; 3]> {
+        let mut soup: Vec<[[u32; 3]; 3]> = self
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let p = [0, 1, 2].map(|i| self.positions[t[i] as usize].map(f32::to_bits));
+                let k = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
+                [p[k], p[(k + 1) % 3], p[(k + 2) % 3]]
+            })
+            .collect();
+        soup.sort_unstable();
+        soup
+    }
+
     /// Six times the signed volume the mesh encloses (the divergence
     /// theorem, about the first vertex for precision); positive
     /// when a closed mesh's triangles wind counter-clockwise seen from

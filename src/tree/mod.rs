@@ -387,8 +387,8 @@ impl ContourTree {
             let t = Instant::now();
             source = OrderSource::Owned(remake(), None);
             times.sort += t.elapsed();
+            progress.stage("augment");
         }
-        progress.stage("augment");
         let t = Instant::now();
         let tree = merge::group(placed, source.order());
         times.augment += t.elapsed();

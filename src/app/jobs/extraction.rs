@@ -389,22 +389,6 @@ mod tests {
     use crate::field::synthetic::Synthetic;
     use crate::progress::Progress;
 
-    /// The triangles by their corners' positions (bits), each turned to
-    /// start at its least corner, sorted: a mesh up to its vertex order.
-    fn soup(m: &ContourMesh) -> Vec<[[u32; 3]; 3]> {
-        let mut soup: Vec<[[u32; 3]; 3]> = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                let p = [0, 1, 2].map(|i| m.positions[t[i] as usize].map(f32::to_bits));
-                let k = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
-                [p[k], p[(k + 1) % 3], p[(k + 2) % 3]]
-            })
-            .collect();
-        soup.sort_unstable();
-        soup
-    }
-
     /// Requests along an arc, as a drag makes them: the first (its size
     /// unknown) is extracted afresh, every later one by the contour kept
     /// for dragging; each gives the mesh extracted afresh (the same
@@ -451,7 +435,11 @@ mod tests {
             .expect("not cancelled")
             .expect("the arc spans h");
             assert!(fresh.num_triangles() > 0);
-            assert_eq!(soup(&mesh), soup(&fresh), "step {k}: the same triangles");
+            assert_eq!(
+                mesh.triangle_soup(),
+                fresh.triangle_soup(),
+                "step {k}: the same triangles"
+            );
             assert_eq!(mesh.positions.len(), fresh.positions.len(), "step {k}");
             let kept = jobs
                 .kept
