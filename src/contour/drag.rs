@@ -68,7 +68,9 @@
 //! only contours of up to 1 M triangles (`app::jobs::extraction`, where
 //! the limit's measurements are: 7 ms a step at 156k triangles, 65 ms at
 //! 854k, about the sweep's at 1.4-1.8 M), and extracts larger ones afresh
-//! by [`super::ContourFollower::extract`].
+//! by [`super::ContourFollower::extract`]. It starts one in the
+//! background as soon as such a contour has been extracted afresh (a
+//! click), so that a drag's first step is a step too.
 //!
 //! **Cancellation.** A step changes its state without asking (that part is
 //! short); the output passes stop when `cancel` says so, leaving the state
@@ -199,9 +201,16 @@ pub struct DraggedContour {
     free: Vec<u32>,
     /// Pairs with a crossed face on the volume's boundary.
     boundary: usize,
+    /// Triangles of all pairs.
+    triangles: usize,
     stack: Vec<Tet>,
     /// Per-thread sums of area-weighted normals, kept between steps.
     sums: Vec<Vec<[f32; 3]>>,
+    /// The output's map from contour vertex slots to mesh vertices and
+    /// its vertices' downhill gradients, kept between steps (a fresh page
+    /// costs as much as the work done on it).
+    renumber: Vec<u32>,
+    gradients: Vec<Option<[f32; 3]>>,
     div_x: StrengthReducedU32,
     div_y: StrengthReducedU32,
 }
@@ -237,8 +246,11 @@ impl DraggedContour {
             refs: Vec::new(),
             free: Vec::new(),
             boundary: 0,
+            triangles: 0,
             stack: Vec::new(),
             sums: Vec::new(),
+            renumber: Vec::new(),
+            gradients: Vec::new(),
             div_x: StrengthReducedU32::new(dims[0] as u32),
             div_y: StrengthReducedU32::new(dims[1] as u32),
         };
@@ -266,7 +278,7 @@ impl DraggedContour {
 
     /// Triangles of the kept contour.
     pub fn num_triangles(&self) -> usize {
-        self.pairs.iter().map(|p| p.count as usize).sum()
+        self.triangles
     }
 
     /// Moves the kept contour to the contour of `arc` at `iso` and returns
@@ -307,6 +319,7 @@ impl DraggedContour {
             self.refs.clear();
             self.free.clear();
             self.boundary = 0;
+            self.triangles = 0;
             return Ok(Err(Refused::TooLarge));
         }
         self.iso = iso;
@@ -473,28 +486,28 @@ impl DraggedContour {
         mask
     }
 
-    /// The face neighbour of `t` opposite its corner `k`, None outside the
-    /// volume.
+    /// The lowest corner of the face neighbour of `t` opposite its corner
+    /// `k`, and that neighbour's permutation; None outside the volume.
+    #[inline]
+    fn neighbour_origin(&self, t: Tet, k: usize) -> Option<(u32, u8)> {
+        let (d, p) = TetTables::get().neighbour[t.perm as usize][k];
+        let o = self.records[t.rec as usize].vertex;
+        let c = self.coords(o);
+        let inside = (0..3).all(|i| {
+            let x = c[i] as i64 + d[i];
+            x >= 0 && x + 1 < self.dims[i] as i64
+        });
+        inside.then(|| {
+            let step = d[0] + self.dims[0] as i64 * (d[1] + self.dims[1] as i64 * d[2]);
+            ((o as i64 + step) as u32, p)
+        })
+    }
+
+    /// The face neighbour of `t` opposite its corner `k` (its record made
+    /// if absent), None outside the volume.
     #[inline]
     fn neighbour(&mut self, t: Tet, k: usize) -> Option<Tet> {
-        let (d, p) = TetTables::get().neighbour[t.perm as usize][k];
-        let o = self.records[t.rec as usize].vertex as usize;
-        let [nx, ny, nz] = self.dims;
-        let x = [
-            (o % nx) as i64 + d[0],
-            (o / nx % ny) as i64 + d[1],
-            (o / (nx * ny)) as i64 + d[2],
-        ];
-        if x[0] < 0
-            || x[1] < 0
-            || x[2] < 0
-            || x[0] + 1 >= nx as i64
-            || x[1] + 1 >= ny as i64
-            || x[2] + 1 >= nz as i64
-        {
-            return None;
-        }
-        let origin = (x[0] as usize + nx * (x[1] as usize + ny * x[2] as usize)) as u32;
+        let (origin, p) = self.neighbour_origin(t, k)?;
         Some(self.tet(origin, p))
     }
 
@@ -543,11 +556,12 @@ impl DraggedContour {
             }
         }
         for k in 0..4 {
-            if crossed_face(mask, k) && self.neighbour(t, k).is_none() {
+            if crossed_face(mask, k) && self.neighbour_origin(t, k).is_none() {
                 pair.boundary = true;
             }
         }
         self.boundary += pair.boundary as usize;
+        self.triangles += pair.count as usize;
         let rec = &mut self.records[t.rec as usize];
         rec.tets |= 1 << t.perm;
         rec.pair[t.perm as usize] = self.pairs.len() as u32;
@@ -593,6 +607,7 @@ impl DraggedContour {
             self.records[moved.rec as usize].pair[moved.perm as usize] = i as u32;
         }
         self.boundary -= pair.boundary as usize;
+        self.triangles -= pair.count as usize;
         pair
     }
 
@@ -733,9 +748,12 @@ impl DraggedContour {
         if cancel() {
             return Err(Cancelled);
         }
-        let mut renumber = vec![NONE; n];
+        // Only used slots are read back: stale entries need no clearing.
+        let mut renumber = std::mem::take(&mut self.renumber);
+        renumber.resize(n, NONE);
+        let mut gradients = std::mem::take(&mut self.gradients);
+        gradients.resize(kept, None);
         let mut positions = vec![[0f32; 3]; kept];
-        let mut gradients = vec![None; kept];
         let spacing = self.field.spacing();
         let inverse = spacing.map(f64::recip);
         let iso = self.iso;
@@ -784,6 +802,7 @@ impl DraggedContour {
             .map(|c| c.iter().map(|p| p.count as usize).sum())
             .collect();
         let total: usize = tri_counts.iter().sum();
+        debug_assert_eq!(total, self.triangles, "the running count");
         let mut indices = vec![0u32; 3 * total];
         split_lengths(&mut indices, tri_counts.iter().map(|t| 3 * t))
             .into_par_iter()
@@ -815,29 +834,30 @@ impl DraggedContour {
                 acc.resize(kept, [0.0; 3]);
                 add_area_normals(acc, &positions, tris);
             });
+        // The sums added, normalised and compared with the gradient in one
+        // pass (in the order the sums were made: the same bits as before).
         let mut normals = vec![[0f32; 3]; kept];
-        for other in &sums {
-            normals
-                .par_chunks_mut(CHUNK)
-                .zip(other.par_chunks(CHUNK))
-                .for_each(|(n, o)| {
-                    for (n, o) in n.iter_mut().zip(o) {
+        normals
+            .par_chunks_mut(CHUNK)
+            .zip(gradients.par_chunks(CHUNK))
+            .enumerate()
+            .for_each(|(c, (n, g))| {
+                let at = c * CHUNK;
+                for other in &sums {
+                    for (n, o) in n.iter_mut().zip(&other[at..at + g.len()]) {
                         n[0] += o[0];
                         n[1] += o[1];
                         n[2] += o[2];
                     }
-                });
-        }
-        self.sums = sums;
-        normals
-            .par_chunks_mut(CHUNK)
-            .zip(gradients.par_chunks(CHUNK))
-            .for_each(|(n, g)| {
+                }
                 normalize(n);
                 for (n, g) in n.iter_mut().zip(g) {
                     prefer_gradient(n, *g);
                 }
             });
+        self.sums = sums;
+        self.renumber = renumber;
+        self.gradients = gradients;
         Ok(ContourMesh {
             arc: self.arc,
             isovalue: self.iso.value,

@@ -10,7 +10,7 @@
 //! costs about 5 ns per triangle tested (rayon splits meshes above
 //! [`PARALLEL_TRIANGLES`]).
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
 /// Meshes with more triangles than this are ray-tested in parallel.
@@ -77,22 +77,50 @@ pub enum Corners {
     Long(Vec<u32>),
 }
 
-impl Corners {
-    /// Triangle corners in 16-bit runs when runs average at least
-    /// [`MIN_RUN_TRIANGLES`] triangles, else 32-bit. Parallel.
-    fn new(indices: &[u32]) -> Corners {
-        // Runs never cross a chunk (so chunks are independent).
-        const CHUNK: usize = 3 << 16;
-        let greedy = |c: usize, tris: &[u32]| -> Vec<IndexRun> {
-            let offset = (c * CHUNK) as u32;
-            let mut runs = Vec::new();
+/// What one pass over the triangles finds, in parallel stretches of
+/// [`SCAN_CHUNK`] corners: the greedy 16-bit runs of [`Corners`], the
+/// first corner out of range, and six times the signed volume enclosed
+/// (divergence theorem, from `centre`). One pass instead of three over a
+/// contour's corners: each is as long as the vertices' own pass.
+struct TriangleScan {
+    runs: Vec<IndexRun>,
+    out_of_range: Option<u32>,
+    volume6: f64,
+}
+
+/// Corners per stretch of [`TriangleScan`]: runs never cross one, so the
+/// stretches are independent.
+const SCAN_CHUNK: usize = 3 << 16;
+
+impl TriangleScan {
+    fn new(positions: &[[f32; 3]], indices: &[u32], centre: Vec3A) -> TriangleScan {
+        let n = positions.len() as u32;
+        let stretch = |c: usize, tris: &[u32]| -> TriangleScan {
+            let offset = (c * SCAN_CHUNK) as u32;
+            let mut scan = TriangleScan {
+                runs: Vec::new(),
+                out_of_range: None,
+                volume6: 0.0,
+            };
             let (mut start, mut lo, mut hi) = (0usize, u32::MAX, 0u32);
             for (t, tri) in tris.chunks_exact(3).enumerate() {
                 let tlo = tri[0].min(tri[1]).min(tri[2]);
                 let thi = tri[0].max(tri[1]).max(tri[2]);
+                if thi >= n {
+                    scan.out_of_range.get_or_insert(thi);
+                } else {
+                    // From the first corner: the edges are short, so their
+                    // cross product keeps its precision in f32.
+                    let p = |k: usize| Vec3A::from(positions[tri[k] as usize]);
+                    let (p0, p1, p2) = (p(0), p(1), p(2));
+                    let v = (p0 - centre).dot((p1 - p0).cross(p2 - p0));
+                    if v.is_finite() {
+                        scan.volume6 += v as f64;
+                    }
+                }
                 let (nlo, nhi) = (lo.min(tlo), hi.max(thi));
                 if nhi - nlo > u16::MAX as u32 {
-                    runs.push(IndexRun {
+                    scan.runs.push(IndexRun {
                         start: offset + start as u32,
                         end: offset + 3 * t as u32,
                         base: lo,
@@ -103,23 +131,35 @@ impl Corners {
                 }
             }
             if start < tris.len() {
-                runs.push(IndexRun {
+                scan.runs.push(IndexRun {
                     start: offset + start as u32,
                     end: offset + tris.len() as u32,
                     base: lo,
                 });
             }
-            runs
+            scan
         };
-        let runs: Vec<IndexRun> = if indices.len() > CHUNK {
-            indices
-                .par_chunks(CHUNK)
-                .enumerate()
-                .flat_map_iter(|(c, t)| greedy(c, t))
-                .collect()
-        } else {
-            greedy(0, indices)
-        };
+        if indices.len() <= SCAN_CHUNK {
+            return stretch(0, indices);
+        }
+        let parts: Vec<TriangleScan> = indices
+            .par_chunks(SCAN_CHUNK)
+            .enumerate()
+            .map(|(c, t)| stretch(c, t))
+            .collect();
+        TriangleScan {
+            out_of_range: parts.iter().find_map(|p| p.out_of_range),
+            volume6: parts.iter().map(|p| p.volume6).sum(),
+            runs: parts.into_iter().flat_map(|p| p.runs).collect(),
+        }
+    }
+}
+
+impl Corners {
+    /// Triangle corners in the 16-bit `runs` ([`TriangleScan`]) when runs
+    /// average at least [`MIN_RUN_TRIANGLES`] triangles, else 32-bit.
+    /// Parallel.
+    fn new(indices: &[u32], runs: Vec<IndexRun>) -> Corners {
         let triangles = indices.len() / 3;
         if runs.len() > 1 && runs.len() * MIN_RUN_TRIANGLES > triangles {
             return Corners::Long(indices.to_vec());
@@ -139,11 +179,11 @@ impl Corners {
                 }
             }
         };
-        if indices.len() > CHUNK {
+        if indices.len() > SCAN_CHUNK {
             short[..indices.len()]
-                .par_chunks_mut(CHUNK)
+                .par_chunks_mut(SCAN_CHUNK)
                 .enumerate()
-                .for_each(|(c, out)| write(out, c * CHUNK));
+                .for_each(|(c, out)| write(out, c * SCAN_CHUNK));
         } else {
             write(&mut short[..indices.len()], 0);
         }
@@ -311,22 +351,24 @@ impl PreparedMesh {
                 indices.len()
             ));
         }
-        let n = positions.len();
-        let bad = if indices.len() > 4 * PARALLEL_VERTICES {
-            indices.par_iter().find_any(|&&i| i as usize >= n).copied()
-        } else {
-            indices.iter().find(|&&i| i as usize >= n).copied()
-        };
-        if let Some(bad) = bad {
-            return Err(format!(
-                "index {bad} is out of range for {} positions",
-                positions.len()
-            ));
-        }
         if indices.len() > u32::MAX as usize {
             return Err(format!(
                 "{} triangles are too many to draw",
                 indices.len() / 3
+            ));
+        }
+        let n = positions.len();
+        let bbox = bbox_of(positions, indices);
+        let centre = if bbox.0.cmple(bbox.1).all() {
+            0.5 * (bbox.0 + bbox.1)
+        } else {
+            Vec3::ZERO
+        };
+        let scan = TriangleScan::new(positions, indices, centre.into());
+        if let Some(bad) = scan.out_of_range {
+            return Err(format!(
+                "index {bad} is out of range for {} positions",
+                positions.len()
             ));
         }
         let computed;
@@ -336,7 +378,6 @@ impl PreparedMesh {
         } else {
             normals
         };
-        let bbox = bbox_of(positions, indices);
         let (origin, step) = quantisation(bbox);
         let quantise = |(p, nr): (&[f32; 3], &[f32; 3])| {
             let q = ((Vec3::from(*p) - origin) * step).clamp(Vec3::ZERO, Vec3::splat(Q));
@@ -369,13 +410,12 @@ impl PreparedMesh {
         } else {
             positions.iter().zip(normals).map(quantise).collect()
         };
-        let volume = signed_volume(positions, indices, bbox);
-        let indices = Corners::new(indices);
+        let indices = Corners::new(indices, scan.runs);
         Ok(PreparedMesh {
             vertices,
             indices,
             bbox,
-            ccw_outward: volume >= 0.0,
+            ccw_outward: scan.volume6 >= 0.0,
         })
     }
 
@@ -484,30 +524,6 @@ fn quantisation((lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
     let extent = hi - lo;
     let step = Vec3::select(extent.cmpgt(Vec3::ZERO), Q / extent, Vec3::ZERO);
     (lo, Vec3::select(step.is_finite_mask(), step, Vec3::ZERO))
-}
-
-/// Six times the signed volume enclosed by the triangles (divergence
-/// theorem), measured from the box centre to keep the sums small.
-fn signed_volume(positions: &[[f32; 3]], indices: &[u32], bbox: (Vec3, Vec3)) -> f64 {
-    let o = if bbox.0.cmple(bbox.1).all() {
-        0.5 * (bbox.0 + bbox.1)
-    } else {
-        Vec3::ZERO
-    };
-    let term = |t: &[u32]| {
-        let p = |k: usize| (Vec3::from(positions[t[k] as usize]) - o).as_dvec3();
-        let v = p(0).dot(p(1).cross(p(2)));
-        if v.is_finite() { v } else { 0.0 }
-    };
-    if indices.len() > 12 * PARALLEL_VERTICES {
-        // A sum per stretch of triangles, then of the stretches.
-        indices
-            .par_chunks(3 << 12)
-            .map(|c| c.chunks_exact(3).map(term).sum::<f64>())
-            .sum()
-    } else {
-        indices.chunks_exact(3).map(term).sum()
-    }
 }
 
 /// The bounding box of the finite vertices (inverted when there are no
