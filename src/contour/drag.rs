@@ -55,17 +55,17 @@
 //! vertices, re-evaluates 745-790 k tetrahedra and joins or drops 10-30 k
 //! tetrahedra of other pieces, yet costs 700-911 ms (median; 571 ms on a
 //! quiet machine) against 492-619 ms (quiet: 422 ms) for extracting the head afresh on both cores in the same
-//! run. The change itself takes 200-300 ms (the records, pairs and
-//! vertices it touches lie scattered in memory: about 300 ns per
+//! run. The change itself takes 200-300 ms (about 300 ns per
 //! tetrahedron), and the output passes 400 ms more: every vertex moves, so
-//! positions, normals and triangles are rewritten, and the pairs and
-//! vertex slots, in flood order and reshuffled by every step, are visited
-//! in an order the caches cannot follow (the sweep walks the volume plane
-//! by plane). On a 0.8 M-triangle contour a step costs 43-69 ms against
-//! 89-187 ms following it serially (longer steps). The next step is keeping pairs and
-//! vertices in volume order (the sweep's), so that both the change and
-//! the output stream. Until then the explorer drags by a kept contour
-//! only contours of up to 1 M triangles (`app::jobs::extraction`, where
+//! positions, normals and triangles are rewritten. On a 0.8 M-triangle
+//! contour a step costs 43-69 ms against 89-187 ms following it serially
+//! (longer steps). **Flood order is not the cause:** putting records,
+//! pairs and vertices in volume order (the sweep's) once the flood ends
+//! was tried (a back-and-forth drag of one value unit, 40 steps at 854k
+//! triangles and 12 on the head): steps 49-51 -> 51-55 ms at 854k and
+//! 466 -> 500 ms on the head, and the start 1159 -> 1825 ms; the flood's
+//! depth-first order is already local, so it was left out. The explorer
+//! drags by a kept contour only contours of up to 1 M triangles (`app::jobs::extraction`, where
 //! the limit's measurements are: 7 ms a step at 156k triangles, 65 ms at
 //! 854k, about the sweep's at 1.4-1.8 M), and extracts larger ones afresh
 //! by [`super::ContourFollower::extract`]. It starts one in the

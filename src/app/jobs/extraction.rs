@@ -80,7 +80,8 @@ pub enum Done {
 /// (the explorer's path before, and the sweep alone): 7 ms against 30 at
 /// 156k triangles; 65 ms against 124 and 83 at 854k; 132 / 186 ms (median
 /// / worst) against 231 and 135 at 1.4-1.8 M; 1008 ms against 341 at 5.4 M
-/// (the kept contour's records, in flood order, then miss the caches).
+/// (every vertex moves at every step; see `contour::drag` for why the
+/// flood's order is not the cause).
 pub const KEPT_TRIANGLES: usize = 1_000_000;
 
 /// Volumes of at most this many vertices keep a dragged contour: it holds
