@@ -730,6 +730,61 @@ proptest! {
     }
 }
 
+/// Starting a dragged contour within a limit of tetrahedra: a contour
+/// with more gives up (None), one within it is the same as started
+/// without a limit; on 100 random grids.
+#[test]
+fn a_dragged_contour_started_within_a_limit_gives_up_past_it() {
+    use flexiso::contour::DraggedContour;
+    let mut s = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move |n: u64| {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s % n
+    };
+    let mut gave_up = 0;
+    for _ in 0..100 {
+        let d = [
+            5 + next(6) as usize,
+            5 + next(6) as usize,
+            4 + next(6) as usize,
+        ];
+        let values: Vec<u8> = (0..d[0] * d[1] * d[2]).map(|_| next(9) as u8).collect();
+        let field = ScalarField::new(d, Values::U8(values)).expect("valid");
+        let tree = tree_of(&field);
+        let iso = Isovalue::new(next(16) as f64 / 2.0);
+        let Some(arc) = spanning_arc(&tree, &field, iso, next(5) as usize) else {
+            continue;
+        };
+        let seed = path_seed(&tree, &field, arc, iso).expect("spans");
+        let shared = std::sync::Arc::new(field.clone());
+        let Some((_, whole)) =
+            DraggedContour::start(&shared, &seed, iso, &|| false).expect("not cancelled")
+        else {
+            continue;
+        };
+        // A crossed tetrahedron holds one or two triangles.
+        let triangles = whole.num_triangles();
+        if triangles < 4 {
+            continue;
+        }
+        let under = DraggedContour::start_within(&shared, &seed, iso, triangles / 2 - 1, &|| false)
+            .expect("not cancelled");
+        assert!(
+            under.is_none(),
+            "{triangles} triangles within a limit of {}",
+            triangles / 2 - 1
+        );
+        gave_up += 1;
+        let (_, within) = DraggedContour::start_within(&shared, &seed, iso, triangles, &|| false)
+            .expect("not cancelled")
+            .expect("within its limit");
+        assert_eq!(within.triangle_soup(), whole.triangle_soup());
+    }
+    assert!(gave_up > 50, "{gave_up} contours tried");
+}
+
 /// The drags above take steps, many across nodes (not only within one
 /// arc): 200 random grids, five cuts each.
 #[test]

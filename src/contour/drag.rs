@@ -225,6 +225,21 @@ impl DraggedContour {
         iso: Isovalue,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<Option<(Self, ContourMesh)>, Cancelled> {
+        Self::start_within(field, seed, iso, usize::MAX, cancel)
+    }
+
+    /// [`DraggedContour::start`], given up (None) once the flood has taken
+    /// in more than about `limit` tetrahedra (each holds one or two of the
+    /// contour's triangles; the flood asks every 16k): a drag that jumps
+    /// to a contour too large to keep then costs a bounded part of a
+    /// serial flood, not all of it.
+    pub fn start_within(
+        field: &Arc<ScalarField>,
+        seed: &PathSeed,
+        iso: Isovalue,
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<(Self, ContourMesh)>, Cancelled> {
         let dims = field.dims();
         if dims.iter().any(|&d| d < 2) {
             return Ok(None);
@@ -258,7 +273,7 @@ impl DraggedContour {
             return Ok(None);
         };
         let start = d.tet(origin, perm);
-        if !crate::with_values!(field.values(), v => d.flood_add(v.as_slice(), start, iso, usize::MAX, cancel))?
+        if !crate::with_values!(field.values(), v => d.flood_add(v.as_slice(), start, iso, limit, cancel))?
         {
             return Ok(None);
         }

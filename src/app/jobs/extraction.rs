@@ -194,25 +194,25 @@ impl Extractions {
                     .ok()
                     .and_then(|mut p| p.pop())
                     .unwrap_or_default();
-                let expected = sizes.lock().ok().and_then(|m| m.get(&id).copied());
+                let mut expected = sizes.lock().ok().and_then(|m| m.get(&id).copied());
                 // Superseded: a newer request for this contour is queued.
                 let cancel = || newest.load(Ordering::Relaxed) != request;
-                let (mesh, afresh) =
-                    match drag_step(&kept, id, &field, &tree, superarc, h, expected, &cancel) {
-                        Some(mesh) => (mesh, false),
-                        None => (
-                            extract_mesh(
-                                &field,
-                                &tree,
-                                superarc,
-                                h,
-                                &mut scratch,
-                                expected,
-                                &cancel,
-                            ),
-                            true,
-                        ),
-                    };
+                let (mesh, afresh) = match drag_step(
+                    &kept,
+                    id,
+                    &field,
+                    &tree,
+                    superarc,
+                    h,
+                    &mut expected,
+                    &cancel,
+                ) {
+                    Some(mesh) => (mesh, false),
+                    None => (
+                        extract_mesh(&field, &tree, superarc, h, &mut scratch, expected, &cancel),
+                        true,
+                    ),
+                };
                 if let Ok(mut p) = pool.lock() {
                     p.push(scratch);
                 }
@@ -387,7 +387,9 @@ impl Extractions {
 /// (see the module documentation): moved there if it is `id`'s, else
 /// started there, when `id`'s last mesh had at most [`KEPT_TRIANGLES`]
 /// (`expected`). None when this is not the way (no size known, a large
-/// contour or volume, a 2D grid): then [`extract_mesh`].
+/// contour or volume, a 2D grid, or a contour that proved larger than the
+/// limit while it was being kept: `expected` then says so): then
+/// [`extract_mesh`].
 #[allow(clippy::too_many_arguments)]
 fn drag_step(
     kept: &Mutex<Option<Kept>>,
@@ -396,7 +398,7 @@ fn drag_step(
     tree: &ContourTree,
     superarc: ArcId,
     h: f64,
-    expected: Option<usize>,
+    expected: &mut Option<usize>,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Option<Result<Option<ContourMesh>, Cancelled>> {
     let small = expected.is_some_and(|n| n <= KEPT_TRIANGLES) && field.len() <= KEPT_VOLUME;
@@ -437,7 +439,10 @@ fn drag_step(
     let Some(seed) = path_seed(tree, field, superarc, iso) else {
         return Some(Ok(None));
     };
-    match DraggedContour::start(field, &seed, iso, cancel) {
+    // A jump to a contour too large to keep (the head, from a structure
+    // inside it) gives up after about a million tetrahedra and is
+    // extracted afresh, instead of flooding and keeping all of it.
+    match DraggedContour::start_within(field, &seed, iso, KEPT_TRIANGLES, cancel) {
         Ok(Some((contour, mesh))) => {
             keep(Kept {
                 id,
@@ -446,7 +451,12 @@ fn drag_step(
             });
             Some(Ok(Some(mesh)))
         }
-        Ok(None) => None,
+        Ok(None) => {
+            // Given up past the limit (or no contour to keep): at least
+            // that large, which sends it to the sweep sooner.
+            *expected = expected.map(|n| n.max(KEPT_TRIANGLES + 1));
+            None
+        }
         Err(c) => Some(Err(c)),
     }
 }
