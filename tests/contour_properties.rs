@@ -136,20 +136,41 @@ fn check_all(
     contours
 }
 
+/// The xorshift generator of `seed` (not 0): each call the next state.
+fn xorshift(mut s: u64) -> impl FnMut() -> u64 {
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    }
+}
+
 /// A float32 field of `dims` with values from a xorshift of `seed`, in
 /// [0, 1): no ties.
 fn noisy_field(dims: (usize, usize, usize), seed: u64) -> ScalarField {
     let n = dims.0 * dims.1 * dims.2;
-    let mut s = seed | 1;
+    let mut next = xorshift(seed | 1);
     let values: Vec<f32> = (0..n)
-        .map(|_| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        })
+        .map(|_| (next() >> 40) as f32 / (1u64 << 24) as f32)
         .collect();
     ScalarField::new([dims.0, dims.1, dims.2], Values::F32(values)).expect("valid")
+}
+
+/// An 8-bit grid with sides `least` plus up to `spread - 1` each and
+/// values below `levels` (many ties), drawn by `below` (a number below
+/// its argument).
+fn random_u8_grid(
+    below: &mut impl FnMut(u64) -> u64,
+    least: [usize; 3],
+    spread: u64,
+    levels: u64,
+) -> ScalarField {
+    let d = least.map(|l| l + below(spread) as usize);
+    let values: Vec<u8> = (0..d[0] * d[1] * d[2])
+        .map(|_| below(levels) as u8)
+        .collect();
+    ScalarField::new(d, Values::U8(values)).expect("valid")
 }
 
 fn random_field() -> impl Strategy<Value = ScalarField> {
@@ -736,22 +757,11 @@ proptest! {
 #[test]
 fn a_dragged_contour_started_within_a_limit_gives_up_past_it() {
     use flexiso::contour::DraggedContour;
-    let mut s = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move |n: u64| {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s % n
-    };
+    let mut state = xorshift(0x2545_F491_4F6C_DD1D);
+    let mut next = move |n: u64| state() % n;
     let mut gave_up = 0;
     for _ in 0..100 {
-        let d = [
-            5 + next(6) as usize,
-            5 + next(6) as usize,
-            4 + next(6) as usize,
-        ];
-        let values: Vec<u8> = (0..d[0] * d[1] * d[2]).map(|_| next(9) as u8).collect();
-        let field = ScalarField::new(d, Values::U8(values)).expect("valid");
+        let field = random_u8_grid(&mut next, [5, 5, 4], 6, 9);
         let tree = tree_of(&field);
         let iso = Isovalue::new(next(16) as f64 / 2.0);
         let Some(arc) = spanning_arc(&tree, &field, iso, next(5) as usize) else {
@@ -789,22 +799,11 @@ fn a_dragged_contour_started_within_a_limit_gives_up_past_it() {
 /// arc): 200 random grids, five cuts each.
 #[test]
 fn drags_cross_nodes_on_random_grids() {
-    let mut s = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = move |n: u64| {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s % n
-    };
+    let mut state = xorshift(0x9E37_79B9_7F4A_7C15);
+    let mut next = move |n: u64| state() % n;
     let (mut steps, mut across) = (0, 0);
     for _ in 0..200 {
-        let d = [
-            4 + next(4) as usize,
-            4 + next(4) as usize,
-            3 + next(4) as usize,
-        ];
-        let values: Vec<u8> = (0..d[0] * d[1] * d[2]).map(|_| next(7) as u8).collect();
-        let field = ScalarField::new(d, Values::U8(values)).expect("valid");
+        let field = random_u8_grid(&mut next, [4, 4, 3], 4, 7);
         let tree = tree_of(&field);
         let from = Isovalue::new(next(14) as f64 / 2.0);
         let Some(arc) = (0..tree.arcs().len() as u32)
