@@ -240,6 +240,22 @@ impl DraggedContour {
         limit: usize,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<Option<(Self, ContourMesh)>, Cancelled> {
+        let Some(mut d) = Self::keep(field, seed, iso, limit, cancel)? else {
+            return Ok(None);
+        };
+        let mesh = d.mesh(cancel)?;
+        Ok(Some((d, mesh)))
+    }
+
+    /// [`DraggedContour::start_within`] without making the mesh: for a
+    /// contour whose mesh at `iso` the caller already has.
+    pub fn keep(
+        field: &Arc<ScalarField>,
+        seed: &PathSeed,
+        iso: Isovalue,
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<Self>, Cancelled> {
         let dims = field.dims();
         if dims.iter().any(|&d| d < 2) {
             return Ok(None);
@@ -277,8 +293,7 @@ impl DraggedContour {
         {
             return Ok(None);
         }
-        let mesh = d.mesh(cancel)?;
-        Ok(Some((d, mesh)))
+        Ok(Some(d))
     }
 
     /// The cut the kept contour is at.

@@ -259,7 +259,9 @@ impl Extractions {
             let Some(seed) = path_seed(&tree, &field, superarc, iso) else {
                 return Ok(());
             };
-            if let Ok(Some((contour, _))) = DraggedContour::start(&field, &seed, iso, &stale)
+            // Its mesh is the one just extracted: only the state is made.
+            if let Ok(Some(contour)) =
+                DraggedContour::keep(&field, &seed, iso, KEPT_TRIANGLES, &stale)
                 && let Ok(mut slot) = kept.lock()
                 // Asked under the lock: `forget` cancels, then empties the
                 // slot under it, so a removed contour is never left kept.
