@@ -23,6 +23,7 @@ use flexiso::field::io::{ReadOptions, read_volume};
 use flexiso::field::synthetic::Synthetic;
 use flexiso::field::{Isovalue, ScalarField};
 use flexiso::progress::Progress;
+use flexiso::render::PreparedMesh;
 use flexiso::tree::ContourTree;
 use std::hint::black_box;
 use std::path::Path;
@@ -498,8 +499,9 @@ fn stats(v: &[f64]) -> (f64, f64) {
 }
 
 /// A drag of `steps` steps of `delta` along `chain` from `iso` by
-/// [`DraggedContour`]: each step from the last mesh, at the cost of the
-/// change. Prints the cost of starting (following the contour once and
+/// [`DraggedContour`], turning back at the chain's ends: each step from
+/// the last mesh, at the cost of the change, written into the arrays of
+/// the mesh two steps before as the explorer does. Prints the cost of starting (following the contour once and
 /// keeping it) and, per step, new isovalue to mesh ready for upload
 /// (step and preparation), median and worst; checks each mesh's size
 /// against the parallel extraction's.
@@ -528,12 +530,37 @@ fn incremental_drag(
     let mut check = ContourFollower::new(field);
     let (mut times, mut step_only, mut refused) = (vec![], vec![], 0);
     let mut sizes = (first.num_triangles(), first.num_triangles());
+    // As the explorer does: a step's mesh is written into the arrays of
+    // the one two steps before, once that is let go (`Spares`).
+    let mut spares = std::collections::VecDeque::from([(first, PreparedMesh::default())]);
     let cpu0 = process_cpu();
+    // At an end of the chain the drag turns back, as a hand does.
+    let (mut at, mut dir, mut turns) = (iso.value, delta, 0);
     for k in 1..=steps {
-        let iso = Isovalue::new(iso.value + delta * k as f64);
-        let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, chain, iso) else {
+        let mut seed = None;
+        for _ in 0..2 {
+            let iso = Isovalue::new(at + dir);
+            seed = flexiso::contour::path_seed_in_chain(tree, field, chain, iso);
+            if seed.is_some() {
+                break;
+            }
+            dir = -dir;
+            turns += 1;
+        }
+        let Some(seed) = seed else {
             break;
         };
+        at += dir;
+        let iso = Isovalue::new(at);
+        let spare = if spares.len() >= 2 {
+            spares.pop_front()
+        } else {
+            None
+        };
+        let spare_gpu = spare.map_or_else(PreparedMesh::default, |(m, p)| {
+            dragged.recycle(m);
+            p
+        });
         let t = Instant::now();
         let budget = step_budget(dragged.num_triangles());
         let mesh = match dragged
@@ -551,7 +578,9 @@ fn incremental_drag(
             }
         };
         let s = t.elapsed().as_secs_f64() * 1e3;
-        black_box(prepare(&mesh));
+        let gpu =
+            PreparedMesh::new_reusing(&mesh.positions, &mesh.normals, &mesh.indices, spare_gpu)
+                .expect("a contour is a valid mesh");
         times.push(t.elapsed().as_secs_f64() * 1e3);
         step_only.push(s);
         sizes = (
@@ -566,13 +595,15 @@ fn incremental_drag(
                 "the dragged contour is the extracted one"
             );
         }
+        spares.push_back((mesh, gpu));
     }
     let cpu = cpu0
         .zip(process_cpu())
         .map_or(f64::NAN, |(a, b)| (b - a) * 1e3 / times.len().max(1) as f64);
     let ((m, w), (sm, sw)) = (stats(&times), stats(&step_only));
     println!(
-        "{name}: incremental drag of {} steps of {delta:+} from h = {} ({}..{} triangles): \
+        "{name}: incremental drag of {} steps of {delta:+} from h = {} ({turns} turns at the \
+         chain's ends; {}..{} triangles): \
          start {start:.0} ms; new isovalue to mesh ready for upload, median / worst step \
          {m:.0} / {w:.0} ms (the step alone {sm:.0} / {sw:.0} ms; CPU per step, all threads, \
          with the checks {cpu:.0} ms); {refused} steps refused and restarted",
@@ -705,6 +736,9 @@ fn drag_latency(
 criterion_group!(benches, contour);
 
 fn main() {
+    // As the program does: large freed arrays go back to the system at
+    // once, so a fresh array is fresh pages (see `pages`).
+    flexiso::pages::return_freed_arrays();
     quick();
     if std::env::var("FLEXISO_BENCH_QUICK").as_deref() == Ok("1") {
         return;

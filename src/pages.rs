@@ -32,6 +32,48 @@ pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
     v
 }
 
+/// `spare` made `n` copies of `value`, in its own allocation when that
+/// is large enough (a recycled array: no fresh page to fault in and zero,
+/// which on a large mesh costs as much as making it), else [`filled`].
+pub fn refilled<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
+    if spare.capacity() < n {
+        drop(spare);
+        return filled(n, value);
+    }
+    spare.truncate(n);
+    spare.par_chunks_mut(1 << 16).for_each(|c| c.fill(value));
+    spare.resize(n, value);
+    spare
+}
+
+/// A copy of `from`, in `spare`'s allocation when that is large enough,
+/// else on huge pages when it is large; copied on every core.
+pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {
+    let n = from.len();
+    if spare.capacity() < n {
+        spare = Vec::with_capacity(n);
+        advise(spare.as_ptr() as *const u8, std::mem::size_of_val(from));
+    }
+    spare.truncate(n);
+    let old = spare.len();
+    spare
+        .par_chunks_mut(1 << 16)
+        .zip(from[..old].par_chunks(1 << 16))
+        .for_each(|(out, c)| out.copy_from_slice(c));
+    let tail = &from[old..];
+    spare.spare_capacity_mut()[..tail.len()]
+        .par_chunks_mut(1 << 16)
+        .zip(tail.par_chunks(1 << 16))
+        .for_each(|(out, c)| {
+            for (o, &x) in out.iter_mut().zip(c) {
+                o.write(x);
+            }
+        });
+    // SAFETY: the elements from `old` to `n` were all written just above.
+    unsafe { spare.set_len(n) };
+    spare
+}
+
 /// Returns large freed arrays to the system at once: glibc's
 /// `M_MMAP_THRESHOLD` fixed at 1 MiB. By default it grows with every large
 /// block freed, up to 32 MiB, after which arrays of up to 32 MiB (the
@@ -83,5 +125,36 @@ mod tests {
         }
         let v = filled(HUGE, u64::MAX);
         assert!(v.iter().all(|&x| x == u64::MAX));
+    }
+
+    /// Recycled arrays, shorter, longer or as long as asked for, come back
+    /// holding exactly what was asked for, in the old allocation when it
+    /// fits.
+    #[test]
+    fn recycled_arrays_hold_what_was_asked_for() {
+        let big = (HUGE / 4) + 12_345;
+        let from: Vec<u32> = (0..big as u32)
+            .map(|i| i.wrapping_mul(2_654_435_761))
+            .collect();
+        for spare_len in [0, 1, 1000, big / 2, big, big + 70_000] {
+            for n in [0, 1, 999, 70_000, big] {
+                let spare: Vec<u32> = vec![9; spare_len];
+                let fits = spare.capacity() >= n;
+                let at = spare.as_ptr();
+                let v = refilled(spare, n, 7u32);
+                assert_eq!(v.len(), n);
+                assert!(v.iter().all(|&x| x == 7));
+                if fits && spare_len > 0 {
+                    assert_eq!(v.as_ptr(), at, "the old allocation");
+                }
+                let spare: Vec<u32> = vec![9; spare_len];
+                let at = spare.as_ptr();
+                let c = copied(spare, &from[..n]);
+                assert_eq!(c, &from[..n]);
+                if fits && spare_len > 0 {
+                    assert_eq!(c.as_ptr(), at, "the old allocation");
+                }
+            }
+        }
     }
 }

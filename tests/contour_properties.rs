@@ -646,7 +646,10 @@ fn spanning_arc(
 /// Drags one contour through `cuts` from `arc` at `from`: at each cut the
 /// step to every spanning arc reached through the slab gives what the
 /// follower gives for that arc there; arcs not reached are refused and
-/// leave the dragged contour as it was. Returns how many steps were taken.
+/// leave the dragged contour as it was. Every other mesh is given back
+/// once checked ([`DraggedContour::recycle`]), so that steps are made both
+/// in fresh arrays and in recycled ones of other sizes. Returns how many
+/// steps were taken.
 fn drag_matches_the_follower(
     field: &ScalarField,
     tree: &ContourTree,
@@ -667,6 +670,7 @@ fn drag_matches_the_follower(
         return 0;
     };
     assert_same_contour(&first, &oracle.follow(&seed, from), "start");
+    dragged.recycle(first);
     let mut steps = 0;
     for &to in cuts {
         let mut moved = false;
@@ -682,6 +686,9 @@ fn drag_matches_the_follower(
                 Ok(mesh) => {
                     let at = format!("{before:?} -> arc {c} at {to:?}");
                     assert_same_contour(&mesh, &oracle.follow(&seed, to), &at);
+                    if steps % 2 == 1 {
+                        dragged.recycle(mesh);
+                    }
                     moved = true;
                     steps += 1;
                     break;

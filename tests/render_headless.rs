@@ -510,6 +510,40 @@ fn nearby_corners_travel_as_16_bit_runs_and_scattered_ones_as_32_bit() {
     assert_eq!(m.corners().len(), 3);
 }
 
+/// A mesh prepared in the arrays of another (a drag step reusing the
+/// GPU form of the mesh two steps before) is the same as one prepared in
+/// fresh arrays, whatever the other was: 16- or 32-bit, larger or smaller.
+#[test]
+fn a_mesh_prepared_in_recycled_arrays_is_the_same() {
+    let (p, i) = terrain(400);
+    let n = p.len() as u32;
+    let scattered: Vec<u32> = i
+        .iter()
+        .map(|&v| v.wrapping_mul(2_654_435_761) % n)
+        .collect();
+    let (sp, si) = terrain(60);
+    let (bp, bn, bi) = icosphere([0.5; 3], 0.3, 5);
+    type Mesh<'a> = (&'a [[f32; 3]], &'a [[f32; 3]], &'a [u32]);
+    let meshes: [Mesh; 5] = [
+        (&p, &[], &i),
+        (&p, &[], &scattered),
+        (&sp, &[], &si),
+        (&bp, &bn, &bi),
+        (&p[..3], &[], &[0, 1, 2]),
+    ];
+    for (a, &(ap, an, ai)) in meshes.iter().enumerate() {
+        for (b, &(bp, bn, bi)) in meshes.iter().enumerate() {
+            let spare = PreparedMesh::new(bp, bn, bi).expect("valid");
+            let reused = PreparedMesh::new_reusing(ap, an, ai, spare).expect("valid");
+            let fresh = PreparedMesh::new(ap, an, ai).expect("valid");
+            assert!(
+                reused == fresh,
+                "mesh {a} prepared in the arrays of mesh {b}"
+            );
+        }
+    }
+}
+
 /// A mesh drawn in 16-bit runs (one draw each, from its base vertex) is
 /// the same picture as the same mesh drawn with 32-bit indices.
 #[test]

@@ -21,7 +21,12 @@ impl std::fmt::Display for ContourId {
 /// `mesh` made ready for the GPU, for the threads that extract contours
 /// (a contour mesh is always well formed; None would mean a bug, logged).
 pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
-    match PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices) {
+    prepare_reusing(mesh, PreparedMesh::default())
+}
+
+/// [`prepare`] into `spare`'s arrays ([`PreparedMesh::new_reusing`]).
+pub fn prepare_reusing(mesh: &ContourMesh, spare: PreparedMesh) -> Option<Arc<PreparedMesh>> {
+    match PreparedMesh::new_reusing(&mesh.positions, &mesh.normals, &mesh.indices, spare) {
         Ok(m) => Some(Arc::new(m)),
         Err(e) => {
             eprintln!(

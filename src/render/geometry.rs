@@ -159,12 +159,19 @@ impl Corners {
     /// Triangle corners in the 16-bit `runs` ([`TriangleScan`]) when runs
     /// average at least [`MIN_RUN_TRIANGLES`] triangles, else 32-bit.
     /// Parallel.
-    fn new(indices: &[u32], runs: Vec<IndexRun>) -> Corners {
+    /// `spare`'s array is reused when it is of the kind needed and large
+    /// enough.
+    fn new(indices: &[u32], runs: Vec<IndexRun>, spare: Corners) -> Corners {
         let triangles = indices.len() / 3;
+        let (spare_short, spare_long) = match spare {
+            Corners::Short { indices, .. } => (indices, Vec::new()),
+            Corners::Long(i) => (Vec::new(), i),
+        };
         if runs.len() > 1 && runs.len() * MIN_RUN_TRIANGLES > triangles {
-            return Corners::Long(indices.to_vec());
+            return Corners::Long(crate::pages::copied(spare_long, indices));
         }
-        let mut short = crate::pages::filled(indices.len() + indices.len() % 2, 0u16);
+        let mut short =
+            crate::pages::refilled(spare_short, indices.len() + indices.len() % 2, 0u16);
         let write = |out: &mut [u16], from: usize| {
             // The runs within this stretch of indices.
             let first = runs.partition_point(|r| (r.end as usize) <= from);
@@ -299,7 +306,7 @@ pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
 /// its CPU copy for picking, which reads the dequantised positions.
 ///
 /// [`Renderer::set_prepared_mesh`]: super::Renderer::set_prepared_mesh
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PreparedMesh {
     /// The vertices, quantised in `bbox`.
     pub(crate) vertices: Vec<GpuVertex>,
@@ -337,6 +344,18 @@ impl PreparedMesh {
         positions: &[[f32; 3]],
         normals: &[[f32; 3]],
         indices: &[u32],
+    ) -> Result<Self, String> {
+        Self::new_reusing(positions, normals, indices, PreparedMesh::default())
+    }
+
+    /// [`PreparedMesh::new`], written into `spare`'s arrays where they are
+    /// large enough (a mesh already uploaded and let go: see
+    /// [`crate::pages::refilled`]); the result is the same.
+    pub fn new_reusing(
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        indices: &[u32],
+        spare: PreparedMesh,
     ) -> Result<Self, String> {
         if !normals.is_empty() && normals.len() != positions.len() {
             return Err(format!(
@@ -394,7 +413,7 @@ impl PreparedMesh {
         let vertices = if parallel {
             // Written in place into huge pages: a fresh page's first touch
             // costs as much as the quantising.
-            let mut v = crate::pages::filled(n, GpuVertex::default());
+            let mut v = crate::pages::refilled(spare.vertices, n, GpuVertex::default());
             v.par_chunks_mut(1 << 14)
                 .zip(
                     positions
@@ -410,7 +429,7 @@ impl PreparedMesh {
         } else {
             positions.iter().zip(normals).map(quantise).collect()
         };
-        let indices = Corners::new(indices, scan.runs);
+        let indices = Corners::new(indices, scan.runs, spare.indices);
         Ok(PreparedMesh {
             vertices,
             indices,
