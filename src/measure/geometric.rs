@@ -197,20 +197,27 @@ impl ArcRegions {
         // extremes (the first and last, since they ascend). In parallel over
         // the arcs, on the values in their own type, so the pass over the
         // tree below reads one record per arc and no vertex.
-        let regular: Vec<Regular> = crate::with_values!(field.values(), values => {
-            balanced_arc_ranges(tree)
-                .into_par_iter()
-                .flat_map_iter(|arcs| arcs.map(|a| {
-                    let vs = tree.arc_vertices(ArcId(a as u32));
-                    let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
-                    let (first, last) = match (vs.first(), vs.last()) {
-                        (Some(&f), Some(&l)) => (values[f as usize].to_f64(), values[l as usize].to_f64()),
-                        _ => (f64::NAN, f64::NAN),
-                    };
-                    Regular { count: vs.len() as u64, sum, first, last }
-                }))
-                .collect()
-        });
+        // Side by side with rooting the tree (a serial breadth-first
+        // search): neither reads what the other makes.
+        let (regular, rooted) = rayon::join(
+            || -> Vec<Regular> {
+                crate::with_values!(field.values(), values => {
+                    balanced_arc_ranges(tree)
+                        .into_par_iter()
+                        .flat_map_iter(|arcs| arcs.map(|a| {
+                            let vs = tree.arc_vertices(ArcId(a as u32));
+                            let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
+                            let (first, last) = match (vs.first(), vs.last()) {
+                                (Some(&f), Some(&l)) => (values[f as usize].to_f64(), values[l as usize].to_f64()),
+                                _ => (f64::NAN, f64::NAN),
+                            };
+                            Regular { count: vs.len() as u64, sum, first, last }
+                        }))
+                        .collect()
+                })
+            },
+            || Rooted::new(tree, NodeId(0)),
+        );
         let (total_count, total_sum) = {
             let s: f64 =
                 regular.iter().map(|r| r.sum).sum::<f64>() + node_value.iter().sum::<f64>();
@@ -221,7 +228,6 @@ impl ArcRegions {
 
         // Rooted at the global minimum: count, sum, min, max of every child
         // side, by position in breadth-first order (see `Rooted`).
-        let rooted = Rooted::new(tree, NodeId(0));
         let mut sub: Vec<Side> = rooted
             .order
             .par_iter()
