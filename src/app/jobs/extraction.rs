@@ -37,9 +37,9 @@
 //! [`PreparedMesh::new_reusing`]): fresh arrays are fresh pages, which
 //! the kernel faults in and zeroes at every step, and this program returns
 //! freed arrays to the system at once ([`crate::pages::return_freed_arrays`]).
-//! An 854k-triangle contour's step and preparation took 65-90 ms that way
-//! and 40-47 ms with spares (`examples`-style timing in the session notes,
-//! 2 cores). At most [`SPARES`] meshes of each kind, of contours of at
+//! An 854k-triangle contour's step and preparation took 77-84 ms that way
+//! and 52-61 ms with spares (median of 20 steps, `FLEXISO_BENCH_DRAG=1
+//! FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`, 2 cores). At most [`SPARES`] meshes of each kind, of contours of at
 //! most [`KEPT_TRIANGLES`] triangles, are held, the one on screen among
 //! them.
 
