@@ -74,6 +74,42 @@ pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {
     spare
 }
 
+/// An array written from several threads at once, each slot by one of
+/// them: the scatter of a counting sort or a grouping, whose prefix sums
+/// give every thread its own slots.
+pub struct DisjointSlots<'a, T> {
+    start: *mut T,
+    len: usize,
+    _array: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: writes go to slots no other thread writes (`write`'s contract),
+// and the array is borrowed mutably for the lifetime.
+unsafe impl<T: Send> Sync for DisjointSlots<'_, T> {}
+
+impl<'a, T> DisjointSlots<'a, T> {
+    /// The slots of `array`, borrowed until the writes are done.
+    pub fn new(array: &'a mut [T]) -> Self {
+        Self {
+            start: array.as_mut_ptr(),
+            len: array.len(),
+            _array: std::marker::PhantomData,
+        }
+    }
+
+    /// Writes `value` to slot `i` (checked against the length).
+    ///
+    /// # Safety
+    /// No other thread reads or writes slot `i` while the slots are shared.
+    #[inline(always)]
+    pub unsafe fn write(&self, i: usize, value: T) {
+        assert!(i < self.len, "slot {i} of {}", self.len);
+        // SAFETY: in bounds (just checked); the caller guarantees no other
+        // thread touches this slot.
+        unsafe { self.start.add(i).write(value) };
+    }
+}
+
 /// Returns large freed arrays to the system at once: glibc's
 /// `M_MMAP_THRESHOLD` fixed at 1 MiB. By default it grows with every large
 /// block freed, up to 32 MiB, after which arrays of up to 32 MiB (the

@@ -242,7 +242,7 @@ fn sweep_trees_both_ways<M: Mesh>(
     assert!(words.join.iter().zip(&codes).all(|(&w, &c)| w == c as u32));
     assert_eq!(words.join, words.split);
     let ((join, _), (split, _)) =
-        blocks::sweep_trees(mesh, values, words, order, cuts, &p).expect("not cancelled");
+        blocks::sweep_trees(mesh, values, words, order.into(), cuts, &p).expect("not cancelled");
     (whole, (join, split))
 }
 

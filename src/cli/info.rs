@@ -185,7 +185,12 @@ fn tree_memory(f: &ScalarField) -> (usize, u64) {
     let remade = crate::tree::remakes_order(f.len(), candidates, counting);
     (
         candidates,
-        crate::tree::peak_bytes(f.len(), candidates, remade),
+        crate::tree::peak_bytes(
+            f.len(),
+            candidates,
+            crate::field::order_bytes(f.values()),
+            remade,
+        ),
     )
 }
 

@@ -19,7 +19,10 @@ pub mod source;
 pub mod synthetic;
 
 pub use geometry::{Geometry, GeometryError, Space};
-pub use order::{sorts_by_counting, vertex_order};
+pub use order::{
+    Order, OrderView, PackedOrder, compact_vertex_order, order_bytes, sorts_by_counting,
+    vertex_order,
+};
 
 use thiserror::Error;
 
@@ -440,6 +443,12 @@ impl ScalarField {
     /// The vertices sorted ascending by (value, id).
     pub fn vertex_order(&self) -> Vec<u32> {
         vertex_order(&self.values)
+    }
+
+    /// The same order in the form that takes least memory
+    /// ([`compact_vertex_order`]).
+    pub fn compact_vertex_order(&self) -> Order {
+        compact_vertex_order(&self.values)
     }
 
     /// (x, y, z) of vertex `v`.

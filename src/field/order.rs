@@ -33,6 +33,206 @@ pub fn vertex_order(values: &Values) -> Vec<u32> {
     }
 }
 
+/// The vertex order as the engine holds it while it builds a tree: the
+/// ids, or for 8-bit values the same ids packed in 2 bytes each
+/// ([`PackedOrder`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Order {
+    /// One id per position, 4 bytes each.
+    Ids(Vec<u32>),
+    /// The ids' low halves and the runs of their high halves.
+    Packed(PackedOrder),
+}
+
+/// [`vertex_order`] in the form that takes least memory: packed for 8-bit
+/// values (2 bytes per vertex and one run per value and 64 Ki ids), the
+/// ids otherwise.
+pub fn compact_vertex_order(values: &Values) -> Order {
+    match values {
+        Values::U8(v) => Order::Packed(PackedOrder::sort(v.len(), |i| v[i] as usize)),
+        Values::I8(v) => {
+            Order::Packed(PackedOrder::sort(v.len(), |i| (v[i] as i16 + 128) as usize))
+        }
+        _ => Order::Ids(vertex_order(values)),
+    }
+}
+
+/// Bytes per vertex that [`compact_vertex_order`] takes for these values.
+pub fn order_bytes(values: &Values) -> u64 {
+    match values {
+        Values::U8(_) | Values::I8(_) => 2,
+        _ => 4,
+    }
+}
+
+impl Order {
+    /// A view to read the order through.
+    pub fn view(&self) -> OrderView<'_> {
+        match self {
+            Order::Ids(ids) => OrderView::Ids(ids),
+            Order::Packed(p) => OrderView::Packed(p),
+        }
+    }
+
+    /// The ids, unpacked.
+    pub fn into_ids(self) -> Vec<u32> {
+        match self {
+            Order::Ids(ids) => ids,
+            Order::Packed(p) => {
+                let mut ids = crate::pages::filled(p.len(), 0u32);
+                ids.par_chunks_mut(1 << 16)
+                    .enumerate()
+                    .for_each(|(c, out)| {
+                        let start = c << 16;
+                        let mut buf = Vec::new();
+                        out.copy_from_slice(p.read(start..start + out.len(), &mut buf));
+                    });
+                ids
+            }
+        }
+    }
+}
+
+/// The vertex order of 8-bit values in 2 bytes per vertex. A counting sort
+/// by value is stable over ids, so within one value the ids ascend, and
+/// their high 16 bits stay the same over long runs: at most one run per
+/// value and block of 64 Ki ids (the sort counts each such block on its
+/// own, and a run is one block's ids of one value). Each position keeps
+/// its id's low 16 bits; the runs say what the high bits are.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PackedOrder {
+    /// Per position: the id's low 16 bits.
+    low: Vec<u16>,
+    /// Ascending: where each run starts (the first is 0).
+    run_start: Vec<u32>,
+    /// Per run: its ids' high 16 bits.
+    run_high: Vec<u16>,
+}
+
+impl PackedOrder {
+    /// Sorts the ids `0..n` by `key` (below 256), ties by id.
+    fn sort<K: Fn(usize) -> usize + Sync>(n: usize, key: K) -> Self {
+        const BLOCK: usize = 1 << 16;
+        let mut low = crate::pages::filled(n, 0u16);
+        let firsts = scatter_by_key(0..n, &key, 1 << 8, BLOCK, &mut low, |i| i as u16);
+        // The (value, block) runs in position order, by value then block;
+        // a run is empty where the next one starts at the same slot.
+        let mut runs = (0..1 << 8)
+            .flat_map(|k| {
+                firsts
+                    .iter()
+                    .enumerate()
+                    .map(move |(b, f)| (f[k], b as u16))
+            })
+            .peekable();
+        let (mut run_start, mut run_high) = (Vec::new(), Vec::new());
+        while let Some((start, high)) = runs.next() {
+            let end = runs.peek().map_or(n as u32, |r| r.0);
+            if start < end {
+                run_start.push(start);
+                run_high.push(high);
+            }
+        }
+        Self {
+            low,
+            run_start,
+            run_high,
+        }
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.low.len()
+    }
+
+    /// True if there are none.
+    pub fn is_empty(&self) -> bool {
+        self.low.is_empty()
+    }
+
+    /// The ids at the positions `range`, decoded into `buf`.
+    pub fn read<'b>(&self, range: std::ops::Range<usize>, buf: &'b mut Vec<u32>) -> &'b [u32] {
+        buf.clear();
+        let n = self.len();
+        let mut pos = range.start;
+        let mut r = self.run_start.partition_point(|&s| s as usize <= pos);
+        while pos < range.end {
+            // The run holding `pos` is the last one starting at or before it.
+            let high = (self.run_high[r - 1] as u32) << 16;
+            let end = self
+                .run_start
+                .get(r)
+                .map_or(n, |&s| s as usize)
+                .min(range.end);
+            buf.extend(self.low[pos..end].iter().map(|&l| high | l as u32));
+            pos = end;
+            r += 1;
+        }
+        buf
+    }
+}
+
+/// A vertex order to read: borrowed ids or a [`PackedOrder`].
+#[derive(Clone, Copy, Debug)]
+pub enum OrderView<'a> {
+    /// The ids.
+    Ids(&'a [u32]),
+    /// Packed ids.
+    Packed(&'a PackedOrder),
+}
+
+impl<'a> From<&'a [u32]> for OrderView<'a> {
+    fn from(ids: &'a [u32]) -> Self {
+        OrderView::Ids(ids)
+    }
+}
+
+impl<'a> OrderView<'a> {
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        match self {
+            OrderView::Ids(ids) => ids.len(),
+            OrderView::Packed(p) => p.len(),
+        }
+    }
+
+    /// True if there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes it holds per vertex.
+    pub fn bytes_per_vertex(&self) -> u64 {
+        match self {
+            OrderView::Ids(_) => 4,
+            OrderView::Packed(_) => 2,
+        }
+    }
+
+    /// The ids at the positions `range`: the order's own slice, or decoded
+    /// into `buf`.
+    pub fn read<'b>(&self, range: std::ops::Range<usize>, buf: &'b mut Vec<u32>) -> &'b [u32]
+    where
+        'a: 'b,
+    {
+        match *self {
+            OrderView::Ids(ids) => &ids[range],
+            OrderView::Packed(p) => p.read(range, buf),
+        }
+    }
+
+    /// Calls `f` with the ids at the positions `range`, 64 Ki at a time.
+    pub fn for_each_chunk(&self, range: std::ops::Range<usize>, mut f: impl FnMut(&[u32])) {
+        let mut buf = Vec::new();
+        let mut start = range.start;
+        while start < range.end {
+            let end = (start + (1 << 16)).min(range.end);
+            f(self.read(start..end, &mut buf));
+            start = end;
+        }
+    }
+}
+
 /// True when [`vertex_order`] is a counting sort for these values (8- and
 /// 16-bit types): O(n), and no scratch beyond the order itself but one
 /// count per value and chunk.
@@ -65,29 +265,30 @@ where
     K: Fn(usize) -> usize + Sync,
 {
     let mut out = crate::pages::filled(n, 0u32);
-    scatter_by_key(0..n, &key, buckets, &mut out, |i| i as u32);
+    scatter_by_key(0..n, &key, buckets, 1 << 20, &mut out, |i| i as u32);
     out
 }
 
 /// Writes `item(i)` for the ids `i` of `range` to `out`, stably sorted by
-/// `key` (below `buckets`); returns the bucket starts (`buckets + 1`
-/// offsets into `out`).
+/// `key` (below `buckets`), counting and placing `chunk` ids at a time on
+/// every core; returns per chunk the first slot of each key's ids in it
+/// (key `k`'s bucket starts at chunk 0's first slot for it).
 fn scatter_by_key<K, T, F>(
     range: std::ops::Range<usize>,
     key: &K,
     buckets: usize,
+    chunk: usize,
     out: &mut [T],
     item: F,
-) -> Vec<usize>
+) -> Vec<Vec<u32>>
 where
     K: Fn(usize) -> usize + Sync,
     T: Send,
     F: Fn(usize) -> T + Sync,
 {
-    const CHUNK: usize = 1 << 20;
     let n = range.len();
-    let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(CHUNK))
-        .map(|c| range.start + c * CHUNK..range.start + ((c + 1) * CHUNK).min(n))
+    let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(chunk))
+        .map(|c| range.start + c * chunk..range.start + ((c + 1) * chunk).min(n))
         .collect();
     let mut counts: Vec<Vec<u32>> = chunks
         .par_iter()
@@ -100,19 +301,17 @@ where
         })
         .collect();
     // Exclusive prefix over (bucket, chunk): chunk c's first slot for key k.
-    let mut starts = vec![0usize; buckets + 1];
     let mut total = 0usize;
     for k in 0..buckets {
-        starts[k] = total;
         for c in counts.iter_mut() {
             let here = c[k] as usize;
             c[k] = total as u32;
             total += here;
         }
     }
-    starts[buckets] = total;
     debug_assert_eq!(total, n);
-    let dst = SharedOut(out.as_mut_ptr());
+    let firsts = counts.clone();
+    let dst = crate::pages::DisjointSlots::new(out);
     chunks
         .into_par_iter()
         .zip(counts.into_par_iter())
@@ -122,19 +321,13 @@ where
                 let slot = &mut next[key(i)];
                 // SAFETY: the slots of different chunks and keys are
                 // disjoint ranges of `out` (the prefix sums above), each
-                // written once, and all are below `n = out.len()`.
-                unsafe { *dst.0.add(*slot as usize) = item(i) };
+                // written once.
+                unsafe { dst.write(*slot as usize, item(i)) };
                 *slot += 1;
             }
         });
-    starts
+    firsts
 }
-
-/// The output of [`scatter_by_key`], written from several threads at
-/// disjoint slots.
-struct SharedOut<T>(*mut T);
-// SAFETY: only used for writes to disjoint slots (see `scatter_by_key`).
-unsafe impl<T: Send> Sync for SharedOut<T> {}
 
 /// Sorts ids by a 32-bit key: (key, id) pairs are first bucketed by the
 /// key's high 16 bits (a stable parallel counting pass in id order), then
@@ -148,17 +341,23 @@ where
     // (key, id) pairs scattered by the key's high 16 bits, read in id order:
     // no key is read again, nor from random places.
     let mut pairs = crate::pages::filled(n, 0u64);
-    let starts = scatter_by_key(
+    let firsts = scatter_by_key(
         0..n,
         &|i| (key(i) >> 16) as usize,
         1 << 16,
+        1 << 20,
         &mut pairs,
         |i| ((key(i) as u64) << 32) | i as u64,
     );
     let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(1 << 16);
     let mut rest = pairs.as_mut_slice();
-    for w in starts.windows(2) {
-        let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+    for k in 0..1 << 16 {
+        let end = firsts
+            .first()
+            .and_then(|f| f.get(k + 1))
+            .map_or(n, |&s| s as usize);
+        let start = n - rest.len();
+        let (head, tail) = rest.split_at_mut(end - start);
         buckets.push(head);
         rest = tail;
     }
@@ -342,6 +541,40 @@ mod tests {
             ];
             for values in &all {
                 proptest::prop_assert_eq!(vertex_order(values), by_comparison(values));
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// The packed order reads back as the plain order over any range,
+        /// for u8 and i8 values, few or many levels, on sizes that cross
+        /// the 64 Ki blocks of ids (and the 1 Mi chunks of the plain sort).
+        #[test]
+        fn the_packed_order_reads_as_the_order(
+            n in 0usize..400_000,
+            levels in 1u32..=256,
+            seed in proptest::prelude::any::<u64>(),
+            cut in (0.0f64..1.0, 0.0f64..1.0),
+        ) {
+            let r = |i: usize| ((i as u64 ^ seed).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as u32 % levels;
+            for values in [
+                Values::U8((0..n).map(|i| r(i) as u8).collect()),
+                Values::I8((0..n).map(|i| (r(i) as i32 - 128) as i8).collect()),
+            ] {
+                let plain = vertex_order(&values);
+                let packed = compact_vertex_order(&values);
+                proptest::prop_assert!(matches!(packed, Order::Packed(_)));
+                let view = packed.view();
+                proptest::prop_assert_eq!(view.len(), n);
+                let (a, b) = ((cut.0 * n as f64) as usize, (cut.1 * n as f64) as usize);
+                let range = a.min(b)..a.max(b);
+                let mut buf = Vec::new();
+                proptest::prop_assert_eq!(view.read(range.clone(), &mut buf), &plain[range.clone()]);
+                let mut chunks = Vec::new();
+                view.for_each_chunk(range.clone(), |ids| chunks.extend_from_slice(ids));
+                proptest::prop_assert_eq!(&chunks[..], &plain[range]);
+                proptest::prop_assert_eq!(packed.into_ids(), plain);
             }
         }
     }

@@ -70,7 +70,7 @@ use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
     union,
 };
-use crate::field::VertexOrder;
+use crate::field::{OrderView, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -108,7 +108,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
     words: LinkWords,
-    order: &[u32],
+    order: OrderView<'_>,
     cuts: &[u32],
     progress: &Progress,
 ) -> Result<SweptTrees, Cancelled> {

@@ -64,6 +64,7 @@
 
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
+use crate::field::OrderView;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
 
@@ -78,12 +79,13 @@ pub struct CandidateTree {
     /// Per candidate: `NODE_FLAG | node` for a supernode, otherwise the
     /// superarc it lies inside.
     candidate_place: Vec<u32>,
-    /// Per candidate `a`: pre-order range of `A(a)`'s subtree and the
-    /// superarc of the edge above `A(a)`.
-    join_side: Vec<[u32; 3]>,
-    /// Per candidate `b`: its pre-order number and the superarc of the edge
-    /// above `B(b)` (`NONE` if it has none).
-    split_side: Vec<[u32; 2]>,
+    /// Per candidate `a`: A(a) (`NONE` at the root).
+    a_of: Vec<u32>,
+    /// Per candidate `b`: B(b) (`NONE` if it has none).
+    b_of: Vec<u32>,
+    /// Per candidate: its subtree's pre-order range and the superarc of
+    /// the edge above it (`NONE` at the root).
+    subtree: Vec<[u32; 3]>,
 }
 
 /// Merges the join and split trees (see the module documentation).
@@ -156,6 +158,16 @@ pub fn merge(
     drop((jt_parent, jt_up, st_parent, st_down, leaves));
     progress.check(0, 1)?;
 
+    // A and B from the parents, before the parents become children lists.
+    let a_of = first_chain_top(&parent, |u, x| u > x);
+    progress.check(0, 1)?;
+    let mut b_of = first_chain_top(&parent, |u, x| u < x);
+    // B ends at the root only if no ancestor is higher: then there is none.
+    for b in b_of.iter_mut().filter(|b| **b == 0) {
+        *b = NONE;
+    }
+    progress.check(0, 1)?;
+
     // Children lists of the rooted tree.
     let mut first = vec![0u32; k + 1];
     for &p in &parent[1..] {
@@ -172,84 +184,39 @@ pub fn merge(
     }
     drop((fill, parent));
 
-    // One depth-first pass: pre-order, A and B, superarc labels.
-    let mut tin = crate::pages::filled(k, 0u32);
-    let mut tout = crate::pages::filled(k, 0u32);
-    let mut a_of = crate::pages::filled(k, NONE);
-    let mut b_of = crate::pages::filled(k, NONE);
-    let mut label = crate::pages::filled(k, NONE);
+    // One depth-first pass: pre-order ranges and superarc labels.
+    let mut subtree = crate::pages::filled(k, [0u32, 0, NONE]);
     // Superarcs as (end towards the root, end away from it), candidates.
     let mut ends: Vec<(u32, u32)> = Vec::new();
-    let mut path: Vec<u32> = Vec::new();
-    let mut next_child: Vec<u32> = Vec::new();
-    // Monotone stacks of depths on the path: ancestors' candidate numbers
-    // increasing (for A) and decreasing (for B) with depth; each entry's
-    // overwritten slot saved per depth to restore on the way back.
-    let (mut inc, mut inc_len, mut dec, mut dec_len) = (Vec::new(), 0usize, Vec::new(), 0usize);
-    let mut saved: Vec<Saved> = Vec::new();
+    // The path from the root and, per depth, the next child to visit.
+    let mut path: Vec<(u32, u32)> = Vec::new();
     let mut time = 0u32;
     if k > 0 {
-        path.push(0);
-        next_child.push(first[0]);
-        enter(
-            0,
-            &path,
-            (&mut inc, &mut inc_len),
-            (&mut dec, &mut dec_len),
-            &mut saved,
-            (&mut a_of, &mut b_of),
-        );
-        tin[0] = time;
+        path.push((0, first[0]));
         time += 1;
     }
-    while let Some(&x) = path.last() {
-        let d = path.len() - 1;
-        let i = next_child[d];
+    while let Some(&(x, i)) = path.last() {
         if i < first[x as usize + 1] {
-            next_child[d] = i + 1;
+            path.last_mut().expect("on the path").1 = i + 1;
             let c = child[i as usize];
-            path.push(c);
-            next_child.push(first[c as usize]);
-            enter(
-                c,
-                &path,
-                (&mut inc, &mut inc_len),
-                (&mut dec, &mut dec_len),
-                &mut saved,
-                (&mut a_of, &mut b_of),
-            );
-            tin[c as usize] = time;
-            time += 1;
+            path.push((c, first[c as usize]));
             let l = if x == 0 || node_of[x as usize] != NONE {
                 ends.push((x, NONE));
                 ends.len() as u32 - 1
             } else {
-                label[x as usize]
+                subtree[x as usize][2]
             };
-            label[c as usize] = l;
+            subtree[c as usize] = [time, 0, l];
+            time += 1;
             if node_of[c as usize] != NONE {
                 ends[l as usize].1 = c;
             }
         } else {
-            tout[x as usize] = time;
-            let Saved {
-                inc: (p, old_len, old_val),
-                dec: (q, old_dlen, old_dval),
-            } = saved[d];
-            if old_val != EMPTY {
-                inc[p as usize] = old_val;
-            }
-            inc_len = old_len as usize;
-            if old_dval != EMPTY {
-                dec[q as usize] = old_dval;
-            }
-            dec_len = old_dlen as usize;
-            saved.pop();
+            subtree[x as usize][1] = time;
             path.pop();
-            next_child.pop();
         }
     }
-    drop((child, first, path, next_child, inc, dec, saved));
+    drop((child, first, path));
 
     let mut arcs: Vec<Superarc> = ends
         .iter()
@@ -261,6 +228,7 @@ pub fn merge(
             }
         })
         .collect();
+    drop(ends);
     // Superarcs in the tree's canonical order, by (lower, upper), now: the
     // per-vertex arrays are then made in their final form.
     let mut perm: Vec<u32> = (0..arcs.len() as u32).collect();
@@ -270,116 +238,62 @@ pub fn merge(
         new_id[old as usize] = new as u32;
     }
     arcs = perm.iter().map(|&a| arcs[a as usize]).collect();
-    for l in label.iter_mut().filter(|l| **l != NONE) {
+    drop(perm);
+    for [_, _, l] in subtree.iter_mut().filter(|s| s[2] != NONE) {
         *l = new_id[*l as usize];
     }
-    let join_side: Vec<[u32; 3]> = a_of
-        .iter()
-        .map(|&a| {
-            if a == NONE {
-                [0, 0, NONE]
-            } else {
-                let a = a as usize;
-                [tin[a], tout[a], label[a]]
-            }
-        })
-        .collect();
-    drop((a_of, tout));
-    let split_side: Vec<[u32; 2]> = b_of
-        .iter()
-        .zip(&tin)
-        .map(|(&b, &t)| [t, if b == NONE { NONE } else { label[b as usize] }])
-        .collect();
-    drop((b_of, tin));
     let mut candidate_place = node_of;
-    for (p, &l) in candidate_place.iter_mut().zip(&label) {
-        *p = if *p != NONE { NODE_FLAG | *p } else { l };
+    for (p, s) in candidate_place.iter_mut().zip(&subtree) {
+        *p = if *p != NONE { NODE_FLAG | *p } else { s[2] };
     }
     Ok(CandidateTree {
         nodes,
         arcs,
         candidate_place,
-        join_side,
-        split_side,
+        a_of,
+        b_of,
+        subtree,
     })
 }
 
-/// A monotone stack entry: candidate number (high half), depth (low half),
-/// so the binary search reads one contiguous array.
-type StackEntry = u64;
-
-/// An overwritten slot that was never there.
-const EMPTY: u64 = u64::MAX;
-
-/// What entering a candidate overwrote in each stack: (slot, old length,
-/// old entry), restored when it is left.
-#[derive(Clone, Copy)]
-struct Saved {
-    inc: (u32, u32, StackEntry),
-    dec: (u32, u32, StackEntry),
-}
-
-/// Entering candidate `x` (the last of `path`) in the depth-first pass:
-/// A(x) and B(x) from the monotone stacks, then x pushed on both.
-fn enter(
-    x: u32,
-    path: &[u32],
-    (inc, inc_len): (&mut Vec<StackEntry>, &mut usize),
-    (dec, dec_len): (&mut Vec<StackEntry>, &mut usize),
-    saved: &mut Vec<Saved>,
-    (a_of, b_of): (&mut [u32], &mut [u32]),
-) {
-    let d = (path.len() - 1) as u32;
-    let kid = |e: StackEntry| (e >> 32) as u32;
-    let depth = |e: StackEntry| e as u32 as usize;
-    // Deepest ancestor lower than x: the stack's candidates increase with
-    // depth, so those lower than x are a prefix. The parent is on top of
-    // both stacks, so one of the two searches is over at once.
-    let live = &inc[..*inc_len];
-    let p = if live.last().is_some_and(|&e| kid(e) < x) {
-        live.len()
-    } else {
-        live.partition_point(|&e| kid(e) < x)
-    };
-    if p > 0 {
-        a_of[x as usize] = path[depth(inc[p - 1]) + 1];
+/// For every candidate `x` but the root, the last of its ancestors
+/// (inclusive) before the first one `u` with `beyond(u, x)` false: A(x)
+/// with `beyond = >` (the first ancestor lower than x ends the chain),
+/// B(x) with `<`; the root where every ancestor is beyond. `NONE` at the
+/// root.
+///
+/// Candidates are visited in the order `beyond` sets (from the highest
+/// down for A); those visited, `beyond(u, x)` at x, hang from the others
+/// in chains, and x's answer is the top of its chain. `up[c]` points to a
+/// visited ancestor of `c` in its chain, at first its parent, and finding
+/// a top compresses the path to it; a top stays in its chain when its
+/// parent is visited later, so the pointers stay valid. 4 bytes per
+/// candidate beside the answer, and no stack as deep as the tree.
+fn first_chain_top(parent: &[u32], beyond: impl Fn(u32, u32) -> bool) -> Vec<u32> {
+    let k = parent.len();
+    let mut up = crate::pages::copied(Vec::new(), parent);
+    let mut top = crate::pages::filled(k, NONE);
+    // From the highest down if the candidates beyond x are higher.
+    let descending = k > 1 && beyond(1, 0);
+    for i in 1..k {
+        let x = if descending { k - i } else { i } as u32;
+        let mut t = x;
+        loop {
+            let u = up[t as usize];
+            if u == NONE || !beyond(u, x) {
+                break;
+            }
+            t = u;
+        }
+        let mut c = x;
+        while c != t {
+            let next = up[c as usize];
+            up[c as usize] = t;
+            c = next;
+        }
+        top[x as usize] = t;
     }
-    let live = &dec[..*dec_len];
-    let q = if live.last().is_some_and(|&e| kid(e) > x) {
-        live.len()
-    } else {
-        live.partition_point(|&e| kid(e) > x)
-    };
-    if q > 0 {
-        b_of[x as usize] = path[depth(dec[q - 1]) + 1];
-    }
-    // The slots overwritten, even past the live length: they may hold
-    // live entries of an ancestor's stack, restored when x is left.
-    let entry = ((x as u64) << 32) | d as u64;
-    saved.push(Saved {
-        inc: (
-            p as u32,
-            *inc_len as u32,
-            inc.get(p).copied().unwrap_or(EMPTY),
-        ),
-        dec: (
-            q as u32,
-            *dec_len as u32,
-            dec.get(q).copied().unwrap_or(EMPTY),
-        ),
-    });
-    if p == inc.len() {
-        inc.push(entry);
-    } else {
-        inc[p] = entry;
-    }
-    *inc_len = p + 1;
-    if q == dec.len() {
-        dec.push(entry);
-    } else {
-        dec[q] = entry;
-    }
-    *dec_len = q + 1;
+    top
 }
 
 /// The nearest ancestor of `start` (inclusive) not yet cut, compressing the
@@ -417,8 +331,9 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
         nodes,
         arcs,
         candidate_place,
-        join_side,
-        split_side,
+        a_of,
+        b_of,
+        subtree,
     } = tree;
     join_leafward
         .par_chunks_mut(1 << 14)
@@ -428,10 +343,16 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
                 *j = if *j & CANDIDATE != 0 {
                     candidate_place[(*j & !CANDIDATE) as usize]
                 } else {
-                    let [lo, hi, above_a] = join_side[*j as usize];
-                    let [tb, above_b] = split_side[s as usize];
+                    let [lo, hi, above_a] = match a_of[*j as usize] {
+                        NONE => [0, 0, NONE],
+                        a => subtree[a as usize],
+                    };
+                    let tb = subtree[s as usize][0];
                     if lo <= tb && tb < hi {
-                        above_b
+                        match b_of[s as usize] {
+                            NONE => NONE,
+                            b => subtree[b as usize][2],
+                        }
                     } else {
                         above_a
                     }
@@ -447,7 +368,7 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
 
 /// Lays out the regular vertices of each superarc in the vertex `order`
 /// and assembles the tree.
-pub fn group(placed: Placed, order: &[u32]) -> ContourTree {
+pub fn group(placed: Placed, order: OrderView<'_>) -> ContourTree {
     let Placed {
         nodes,
         arcs,
@@ -462,29 +383,25 @@ pub fn group(placed: Placed, order: &[u32]) -> ContourTree {
 /// order is cut into chunks, each counted and placed by its own thread
 /// (slots of chunk `i` for an arc follow those of chunks before it);
 /// otherwise one pass, since per-chunk counts would outweigh the vertices.
-fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    let is_node = |va: u32| va & NODE_FLAG != 0;
+fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u32>, Vec<u32>) {
+    let n = order.len();
     let threads = rayon::current_num_threads();
-    let chunks = if threads > 1 && arcs * threads * 4 <= order.len() / 16 {
+    let chunks = if threads > 1 && arcs * threads * 4 <= n / 16 {
         threads * 4
     } else {
         1
     };
-    let chunk_len = order.len().div_ceil(chunks).max(1);
-    const AHEAD: usize = 16;
-    let mut counts: Vec<Vec<u32>> = order
-        .par_chunks(chunk_len)
-        .map(|c| {
+    let chunk_len = n.div_ceil(chunks).max(1);
+    let ranges: Vec<std::ops::Range<usize>> = (0..n.div_ceil(chunk_len))
+        .map(|c| c * chunk_len..((c + 1) * chunk_len).min(n))
+        .collect();
+    let mut counts: Vec<Vec<u32>> = ranges
+        .par_iter()
+        .map(|range| {
             let mut count = vec![0u32; arcs];
-            for (i, &v) in c.iter().enumerate() {
-                if let Some(&w) = c.get(i + AHEAD) {
-                    prefetch(vertex_arc, w as usize);
-                }
-                let va = vertex_arc[v as usize];
-                if !is_node(va) {
-                    count[va as usize] += 1;
-                }
-            }
+            for_each_arc(order, vertex_arc, range.clone(), |_, a| {
+                count[a as usize] += 1
+            });
             count
         })
         .collect();
@@ -500,31 +417,43 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: &[u32]) -> (Vec<u32>, Ve
     }
     offsets[arcs] = total;
     let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
-    let dst = SharedSlots(arc_vertices.as_mut_ptr());
-    order
-        .par_chunks(chunk_len)
+    let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
+    ranges
+        .into_par_iter()
         .zip(counts.into_par_iter())
-        .for_each(|(c, mut fill)| {
+        .for_each(|(range, mut fill)| {
             let dst = &dst;
-            for (i, &v) in c.iter().enumerate() {
-                if let Some(&w) = c.get(i + AHEAD) {
-                    prefetch(vertex_arc, w as usize);
-                }
-                let va = vertex_arc[v as usize];
-                if !is_node(va) {
-                    let slot = &mut fill[va as usize];
-                    // SAFETY: each (chunk, arc) owns a disjoint range of
-                    // slots below `total` (the prefix sums above), and
-                    // writes each slot once.
-                    unsafe { *dst.0.add(*slot as usize) = v };
-                    *slot += 1;
-                }
-            }
+            for_each_arc(order, vertex_arc, range, |v, a| {
+                let slot = &mut fill[a as usize];
+                // SAFETY: each (chunk, arc) owns a disjoint range of slots
+                // below `total` (the prefix sums above), and writes each
+                // slot once.
+                unsafe { dst.write(*slot as usize, v) };
+                *slot += 1;
+            });
         });
     (offsets, arc_vertices)
 }
 
-/// `arc_vertices` written from several threads at disjoint slots.
-struct SharedSlots(*mut u32);
-// SAFETY: only used for writes to disjoint slots (see `group_by_arc`).
-unsafe impl Sync for SharedSlots {}
+/// Calls `f(v, arc)` for each regular vertex `v` at the positions `range`
+/// of the order, with its superarc; the superarcs are read ahead (the
+/// reads are scattered over the volume).
+fn for_each_arc(
+    order: OrderView<'_>,
+    vertex_arc: &[u32],
+    range: std::ops::Range<usize>,
+    mut f: impl FnMut(u32, u32),
+) {
+    const AHEAD: usize = 16;
+    order.for_each_chunk(range, |ids| {
+        for (i, &v) in ids.iter().enumerate() {
+            if let Some(&w) = ids.get(i + AHEAD) {
+                prefetch(vertex_arc, w as usize);
+            }
+            let va = vertex_arc[v as usize];
+            if va & NODE_FLAG == 0 {
+                f(v, va);
+            }
+        }
+    })
+}

@@ -43,7 +43,7 @@ pub mod sweep;
 #[cfg(test)]
 mod vertex_merge;
 
-use crate::field::{ScalarField, VertexOrder};
+use crate::field::{Order, OrderView, ScalarField, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
 use merge::NODE_FLAG;
@@ -171,10 +171,11 @@ pub enum BuildError {
     /// The engine's arrays would not fit in the memory left.
     #[error(
         "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
-         ({candidates} candidate nodes, {}% of the vertices: each costs about 90 bytes at the merge), \
+         ({candidates} candidate nodes, {}% of the vertices: each costs about {} bytes at the merge), \
          but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
+        MERGE_BYTES_PER_CANDIDATE,
         available >> 20
     )]
     OutOfMemory {
@@ -197,20 +198,26 @@ impl From<Cancelled> for BuildError {
 }
 
 /// Peak bytes the engine holds beyond the values for `n` vertices of
-/// which `candidates` are candidate nodes (the module doc's account): 12
-/// per vertex and 24 per candidate while sweeping, 12 per vertex and 88
-/// per candidate at the merge (its tables and the tree it builds; fitted
-/// to the peaks `flexiso bench` measures on tooth, engine, the brains and
-/// aneurism, within 5 %), or 8 per vertex there when the order is made
-/// again after the merge (`order_remade`, see [`remakes_order`]).
-pub fn peak_bytes(n: usize, candidates: usize, order_remade: bool) -> u64 {
+/// which `candidates` are candidate nodes (the module doc's account), with
+/// an order of `order_bytes` per vertex (2 packed for 8-bit values, else
+/// 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 20 per
+/// candidate while sweeping; 8 per vertex, the order unless it is let go
+/// (`order_remade`, see [`remakes_order`]), and 56 per candidate at the
+/// merge (its tables and the tree it builds; fitted to the peaks measured
+/// on tooth, engine and the brains, within 5 %, above all three).
+pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
+    let sweeps = (order_bytes + 8) * n + 20 * k;
+    let merge = 8 * n + MERGE_BYTES_PER_CANDIDATE * k;
     if order_remade {
-        (12 * n + 24 * k).max(8 * n + 88 * k)
+        sweeps.max(merge)
     } else {
-        12 * n + 88 * k
+        merge + order_bytes * n
     }
 }
+
+/// What a candidate node costs at the merge's peak (see [`peak_bytes`]).
+const MERGE_BYTES_PER_CANDIDATE: u64 = 56;
 
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
@@ -222,17 +229,19 @@ pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
-/// once the vertex order and the link codes in the sweeps' words (12 bytes
-/// per vertex, already held) are counted back in: a clear error instead of an allocation failure
-/// halfway through, on volumes that are large *and* noisy.
+/// once the vertex order and the link codes in the sweeps' words
+/// (`order_bytes` + 8 per vertex, already held) are counted back in: a
+/// clear error instead of an allocation failure halfway through, on
+/// volumes that are large *and* noisy.
 pub fn check_memory(
     n: usize,
     candidates: usize,
+    order_bytes: u64,
     order_remade: bool,
     available: u64,
 ) -> Result<(), BuildError> {
-    let needed = peak_bytes(n, candidates, order_remade);
-    let available = available.saturating_add(12 * n as u64);
+    let needed = peak_bytes(n, candidates, order_bytes, order_remade);
+    let available = available.saturating_add((order_bytes + 8) * n as u64);
     if needed > available {
         return Err(BuildError::OutOfMemory {
             vertices: n,
@@ -250,21 +259,21 @@ enum OrderSource<'a> {
     Borrowed(&'a [u32]),
     /// The build's own, with a way to make it again if it may be let go
     /// during the merge ([`remakes_order`]).
-    Owned(Vec<u32>, Option<&'a (dyn Fn() -> Vec<u32> + Sync)>),
+    Owned(Order, Option<&'a (dyn Fn() -> Order + Sync)>),
 }
 
 impl OrderSource<'_> {
-    fn order(&self) -> &[u32] {
+    fn order(&self) -> OrderView<'_> {
         match self {
-            OrderSource::Borrowed(order) => order,
-            OrderSource::Owned(order, _) => order,
+            OrderSource::Borrowed(order) => OrderView::Ids(order),
+            OrderSource::Owned(order, _) => order.view(),
         }
     }
 
     /// Frees an owned order (until it is made again).
     fn let_go(&mut self) {
         if let OrderSource::Owned(order, _) = self {
-            *order = Vec::new();
+            *order = Order::Ids(Vec::new());
         }
     }
 }
@@ -289,11 +298,11 @@ impl ContourTree {
     ) -> Result<(Self, BuildTimes), BuildError> {
         let t = Instant::now();
         progress.stage("sort");
-        let order = field.vertex_order();
+        let order = field.compact_vertex_order();
         let sort = t.elapsed();
         let mesh = field.mesh();
         let cuts = blocks::even_cuts(field.len(), blocks);
-        let remake = || field.vertex_order();
+        let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
         let source = OrderSource::Owned(order, counting.then_some(&remake));
         let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, progress))?;
@@ -339,6 +348,7 @@ impl ContourTree {
     ) -> Result<(Self, BuildTimes), BuildError> {
         let order = source.order();
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
+        let order_bytes = order.bytes_per_vertex();
         let mut times = BuildTimes::default();
         if order.is_empty() {
             return Ok((
@@ -360,7 +370,7 @@ impl ContourTree {
             _ => None,
         };
         if let Some(available) = crate::field::io::available_memory() {
-            check_memory(n, candidates, remake.is_some(), available)?;
+            check_memory(n, candidates, order_bytes, remake.is_some(), available)?;
         }
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
@@ -586,47 +596,55 @@ mod tests {
     #[test]
     fn memory_check_follows_the_candidates() {
         let gib = 1u64 << 30;
-        let n = 1usize << 30; // 1024^3
-        // A scan or smooth field (2 % candidates): 13.8 bytes per vertex.
-        assert!(check_memory(n, n / 50, false, 16 * gib).is_ok());
+        let n = 1usize << 30; // 1024^3 uint8: the order packed in 2 bytes
+        // A scan or smooth field (2 % candidates): 11.1 bytes per vertex.
+        assert!(check_memory(n, n / 50, 2, false, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates) on the same machine,
-        // the order held through the merge or not: 36.6 or 32.6 bytes.
+        // the order held through the merge or not: 25.7 or 23.7 bytes.
         let noisy = n * 28 / 100;
-        assert!(check_memory(n, noisy, true, 16 * gib).is_err());
-        let e = check_memory(n, noisy, false, 16 * gib).expect_err("refused");
+        assert!(check_memory(n, noisy, 2, true, 12 * gib).is_err());
+        let e = check_memory(n, noisy, 2, false, 12 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
         else {
             panic!("refused for memory")
         };
-        assert_eq!(needed, peak_bytes(n, noisy, false));
-        assert_eq!(available, 16 * gib + 12 * n as u64);
+        assert_eq!(needed, peak_bytes(n, noisy, 2, false));
+        assert_eq!(available, 12 * gib + 10 * n as u64);
         assert!(
-            needed > 23 * gib,
-            "the merge's 40 bytes per candidate dominate"
+            needed > 25 * gib,
+            "the merge's 56 bytes per candidate dominate"
         );
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
+        assert!(message.contains("about 56 bytes"), "{message}");
         // Exactly at the limit is allowed, a byte more is not.
-        let peak = peak_bytes(1000, 10, false);
-        assert!(check_memory(1000, 10, false, peak - 12_000).is_ok());
-        assert!(check_memory(1000, 10, false, peak - 12_001).is_err());
+        for order_bytes in [2, 4] {
+            let held = (order_bytes + 8) * 1000;
+            let peak = peak_bytes(1000, 10, order_bytes, false);
+            assert!(check_memory(1000, 10, order_bytes, false, peak - held).is_ok());
+            assert!(check_memory(1000, 10, order_bytes, false, peak - held - 1).is_err());
+        }
     }
 
     #[test]
     fn the_order_is_let_go_only_where_it_lowers_the_peak() {
         let n = 1_000_000;
         // Smooth fields and floats keep it; counting sorts with many
-        // candidates let it go, and the peak drops by up to 4 bytes.
+        // candidates let it go, and the peak drops by up to the order's
+        // bytes per vertex.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
         assert!(remakes_order(n, n / 64, true));
-        for k in [n / 64, n / 16, n / 4, n / 2] {
-            let (held, remade) = (peak_bytes(n, k, false), peak_bytes(n, k, true));
-            assert!(remade < held, "{k}");
-            assert!(held - remade <= 4 * n as u64, "{k}");
+        for order_bytes in [2, 4] {
+            for k in [n / 64, n / 16, n / 4, n / 2] {
+                let held = peak_bytes(n, k, order_bytes, false);
+                let remade = peak_bytes(n, k, order_bytes, true);
+                assert!(remade < held, "{k}");
+                assert!(held - remade <= order_bytes * n as u64, "{k}");
+            }
         }
     }
     use crate::field::Values;

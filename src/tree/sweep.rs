@@ -39,10 +39,11 @@
 //!
 //! **Memory per vertex** while sweeping: 4 bytes (its word: link code,
 //! then candidate number or leafward candidate); per candidate 10 bytes
-//! (union-find, rank, parent, children), and 4 more in the split sweep
-//! (its vertex).
+//! (union-find, rank, parent, children). The split tree's list of the
+//! candidates' vertices (4 bytes each) is read off its words after the
+//! sweep, once the union-find is gone.
 
-use crate::field::VertexOrder;
+use crate::field::{OrderView, VertexOrder};
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -130,7 +131,17 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
     progress: &Progress,
 ) -> Result<JoinTree, Cancelled> {
     let words = link_codes.par_iter().map(|&c| c as u32).collect();
-    whole(mesh, values, words, candidates, true, order, progress, true).map(JoinTree)
+    whole(
+        mesh,
+        values,
+        words,
+        candidates,
+        true,
+        order.into(),
+        progress,
+        true,
+    )
+    .map(JoinTree)
 }
 
 /// The split tree: sweeps `order` (ascending) from its start.
@@ -144,7 +155,14 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
 ) -> Result<SplitTree, Cancelled> {
     let words = link_codes.par_iter().map(|&c| c as u32).collect();
     whole(
-        mesh, values, words, candidates, false, order, progress, true,
+        mesh,
+        values,
+        words,
+        candidates,
+        false,
+        order.into(),
+        progress,
+        true,
     )
     .map(SplitTree)
 }
@@ -159,7 +177,7 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mut words: Vec<u32>,
     candidates: usize,
     join: bool,
-    order: &[u32],
+    order: OrderView<'_>,
     progress: &Progress,
     report: bool,
 ) -> Result<SweepTree, Cancelled> {
@@ -167,15 +185,42 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     debug_assert_eq!(words.len(), n);
     let block = Block::new(0, n as u32, n, 0);
     let swept = sweep::<M, O, false>(
-        mesh, values, candidates, join, order, block, &mut words, !join, progress, report,
+        mesh, values, candidates, join, order, block, &mut words, false, progress, report,
     )?;
-    let leafward = words;
+    // The split tree lists the candidates' vertices, read off the words
+    // once the sweep has let its union-find go: 4 bytes per candidate
+    // fewer at the sweeps' peak.
+    let vertex = if join {
+        Vec::new()
+    } else {
+        candidate_vertices(&words, candidates)
+    };
     Ok(SweepTree {
         parent: swept.parent,
         children: swept.children,
-        leafward,
-        vertex: swept.vertex,
+        leafward: words,
+        vertex,
     })
+}
+
+/// The vertex of each of the `candidates` candidates from a sweep's words
+/// (`CANDIDATE | c` at candidate `c`'s vertex), on every core.
+fn candidate_vertices(words: &[u32], candidates: usize) -> Vec<u32> {
+    let mut vertex = crate::pages::filled(candidates, 0u32);
+    let out = crate::pages::DisjointSlots::new(&mut vertex);
+    words
+        .par_chunks(1 << 16)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let first = (c << 16) as u32;
+            for (i, &w) in chunk.iter().enumerate() {
+                if w & CANDIDATE != 0 {
+                    // SAFETY: each candidate number is in exactly one word.
+                    unsafe { out.write((w & !CANDIDATE) as usize, first + i as u32) };
+                }
+            }
+        });
+    vertex
 }
 
 /// Consecutive vertex ids `lo..hi` swept on their own, as one block of the
@@ -286,7 +331,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     values: &O,
     nodes: usize,
     join: bool,
-    order: &[u32],
+    order: OrderView<'_>,
     block: Block,
     leafward: &mut [u32],
     keep_vertex: bool,
@@ -313,6 +358,8 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     // The block's vertices in sweep order, a chunk of the order at a time.
     const CHUNK: usize = 1 << 16;
     let mut visit: Vec<u32> = Vec::with_capacity(CHUNK);
+    // A packed order's chunk, decoded.
+    let mut ids: Vec<u32> = Vec::new();
 
     // How far ahead in the order to prefetch: enough vertices in flight to
     // hide DRAM latency, few enough that the lines are still in L1/L2.
@@ -326,11 +373,8 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
             }
         }
         let end = (start + CHUNK).min(n);
-        let part = if join {
-            &order[n - end..n - start]
-        } else {
-            &order[start..end]
-        };
+        let range = if join { n - end..n - start } else { start..end };
+        let part = order.read(range, &mut ids);
         // The vertices to visit, `seq` read backwards if `rev`: the order
         // itself for the whole mesh, else the block's vertices of it,
         // filtered without a branch per vertex (whether the next vertex of
