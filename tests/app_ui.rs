@@ -585,8 +585,11 @@ fn another_measure_recomputes_the_simplification_and_keeps_the_selection() {
 
 #[test]
 fn the_window_keeps_drawing_while_a_tree_builds_in_the_background() {
+    // Large enough that the job (about a second) outlasts any frame of a
+    // loaded machine's software renderer (up to 350 ms measured): a 128³
+    // field was built in 0.35 s, as long as one slow frame.
     let (mut h, _) = explorer();
-    h.state_mut().open("synthetic:128");
+    h.state_mut().open("synthetic:192");
     let mut steps: Vec<f64> = Vec::new();
     let started = std::time::Instant::now();
     while h.state().busy() && started.elapsed().as_secs() < 120 {
@@ -612,7 +615,7 @@ fn the_window_keeps_drawing_while_a_tree_builds_in_the_background() {
     let app = h.state();
     assert_eq!(
         app.dataset().expect("new dataset").field.dims(),
-        [128, 128, 128]
+        [192, 192, 192]
     );
     assert!(app.selection().contours.is_empty());
 }

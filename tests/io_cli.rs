@@ -87,9 +87,11 @@ fn info_prints_format_dims_type_range_histogram_and_memory() {
         "histogram: 10 bins",
         // Counted from the links (no sort): at least the 2242 supernodes.
         "(4220 candidate nodes, 1.6% of the vertices)",
-        // 12 bytes per vertex and 24 per candidate (the order made again
-        // after the merge, an 8-bit volume with 1.6 % candidates).
-        "about 3.3 MiB",
+        // The sweeps' peak: the packed order (2 bytes per vertex) and 8,
+        // and 20 per candidate (an 8-bit volume with 1.6 % candidates,
+        // whose order is made again after the merge).
+        "contour tree 2.6 MiB at its peak",
+        "about 2.8 MiB",
     ] {
         assert!(out.contains(want), "missing '{want}' in\n{out}");
     }

@@ -7,6 +7,10 @@
 //! 32-bit keys ((key, id) pairs bucketed by the high 16 bits, then each
 //! bucket on its own thread by the low 16 bits, least significant byte
 //! first), and a parallel comparison sort only for f64.
+//!
+//! The tree engine holds the order of 8-bit values packed
+//! ([`compact_vertex_order`], [`PackedOrder`]): 2 bytes per vertex instead
+//! of 4, read back 64 Ki ids at a time ([`OrderView`]).
 
 use super::Values;
 use rayon::prelude::*;

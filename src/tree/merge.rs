@@ -53,10 +53,24 @@
 //!
 //! So `e` is the edge above `A(a)` unless `b` lies in the subtree of `A(a)`
 //! (`tin[A(a)] <= tin[b] < tout[A(a)]`), and then the edge above `B(b)`.
-//! `A` and `B` come from one depth-first pass with a monotone stack of the
-//! ancestors (restored when the pass backs up): O(c log c) for c
-//! candidates. Per vertex the rule reads `a`, `b` (sequentially, in id
-//! order) and two small records of the candidates: no walk, no order.
+//! `A` and `B` come from the parents alone, before the depth-first pass:
+//! visiting the candidates from the highest down, those visited so far
+//! hang from the others in chains, and `A(x)` is the top of `x`'s chain
+//! when `x` is visited (a find with path compression; `B` the same from
+//! the lowest up). Nearly O(c) for c candidates and 4 bytes each beside
+//! the answers: the monotone stacks this replaced (restored as a
+//! depth-first pass backs up) cost 24 bytes per level of a path that, on
+//! a noisy scan, is about as long as the candidates are many. The pass
+//! itself then keeps per candidate its pre-order range and superarc in one
+//! record. Per vertex the rule reads `a`, `b` (sequentially, in id order),
+//! then `A(a)`, `B(b)` and the records of `A(a)`, `b` and `B(b)`: no walk,
+//! no order.
+//!
+//! **Memory** (n vertices, c candidates, beyond the values): 8 bytes per
+//! vertex (the two leafward arrays) and, at the depth-first pass, about
+//! 40 per candidate (the supernode, A, B, the record, the children lists
+//! and the path), plus the supernodes and superarcs (about 36 bytes per
+//! superarc): 56 per candidate in all at the peak on the scans measured.
 //!
 //! Finally the regular vertices of each superarc are laid out in the vertex
 //! order by one counting pass over the order (the one pass that reads the
