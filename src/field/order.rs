@@ -61,7 +61,8 @@ pub fn compact_vertex_order(values: &Values) -> Order {
     }
 }
 
-/// Bytes per vertex that [`compact_vertex_order`] takes for these values.
+/// Bytes per vertex that [`compact_vertex_order`] takes for these values:
+/// 2 where it packs them (the types it matches), else 4.
 pub fn order_bytes(values: &Values) -> u64 {
     match values {
         Values::U8(_) | Values::I8(_) => 2,
@@ -75,24 +76,6 @@ impl Order {
         match self {
             Order::Ids(ids) => OrderView::Ids(ids),
             Order::Packed(p) => OrderView::Packed(p),
-        }
-    }
-
-    /// The ids, unpacked.
-    pub fn into_ids(self) -> Vec<u32> {
-        match self {
-            Order::Ids(ids) => ids,
-            Order::Packed(p) => {
-                let mut ids = crate::pages::filled(p.len(), 0u32);
-                ids.par_chunks_mut(1 << 16)
-                    .enumerate()
-                    .for_each(|(c, out)| {
-                        let start = c << 16;
-                        let mut buf = Vec::new();
-                        out.copy_from_slice(p.read(start..start + out.len(), &mut buf));
-                    });
-                ids
-            }
         }
     }
 }
@@ -118,23 +101,18 @@ impl PackedOrder {
     fn sort<K: Fn(usize) -> usize + Sync>(n: usize, key: K) -> Self {
         const BLOCK: usize = 1 << 16;
         let mut low = crate::pages::filled(n, 0u16);
-        let firsts = scatter_by_key(0..n, &key, 1 << 8, BLOCK, &mut low, |i| i as u16);
-        // The (value, block) runs in position order, by value then block;
-        // a run is empty where the next one starts at the same slot.
-        let mut runs = (0..1 << 8)
-            .flat_map(|k| {
-                firsts
-                    .iter()
-                    .enumerate()
-                    .map(move |(b, f)| (f[k], b as u16))
-            })
-            .peekable();
+        let ends = scatter_by_key(0..n, &key, 1 << 8, BLOCK, &mut low, |i| i as u16);
+        // The (value, block) runs in position order, by value then block:
+        // each starts where the one before it ends; skip the empty ones.
         let (mut run_start, mut run_high) = (Vec::new(), Vec::new());
-        while let Some((start, high)) = runs.next() {
-            let end = runs.peek().map_or(n as u32, |r| r.0);
-            if start < end {
-                run_start.push(start);
-                run_high.push(high);
+        let mut start = 0u32;
+        for k in 0..1 << 8 {
+            for (b, e) in ends.iter().enumerate() {
+                if start < e[k] {
+                    run_start.push(start);
+                    run_high.push(b as u16);
+                }
+                start = e[k];
             }
         }
         Self {
@@ -275,8 +253,9 @@ where
 
 /// Writes `item(i)` for the ids `i` of `range` to `out`, stably sorted by
 /// `key` (below `buckets`), counting and placing `chunk` ids at a time on
-/// every core; returns per chunk the first slot of each key's ids in it
-/// (key `k`'s bucket starts at chunk 0's first slot for it).
+/// every core; returns per chunk one past the last slot of each key's ids
+/// in it (`ends[c][k]`; the slots run by key, then chunk, so the last
+/// chunk's end for a key is where its bucket ends).
 fn scatter_by_key<K, T, F>(
     range: std::ops::Range<usize>,
     key: &K,
@@ -314,12 +293,11 @@ where
         }
     }
     debug_assert_eq!(total, n);
-    let firsts = counts.clone();
     let dst = crate::pages::DisjointSlots::new(out);
     chunks
         .into_par_iter()
-        .zip(counts.into_par_iter())
-        .for_each(|(r, mut next)| {
+        .zip(counts.par_iter_mut())
+        .for_each(|(r, next)| {
             let dst = &dst;
             for i in r {
                 let slot = &mut next[key(i)];
@@ -330,7 +308,8 @@ where
                 *slot += 1;
             }
         });
-    firsts
+    // Each chunk's next slot per key is now one past its last.
+    counts
 }
 
 /// Sorts ids by a 32-bit key: (key, id) pairs are first bucketed by the
@@ -345,7 +324,7 @@ where
     // (key, id) pairs scattered by the key's high 16 bits, read in id order:
     // no key is read again, nor from random places.
     let mut pairs = crate::pages::filled(n, 0u64);
-    let firsts = scatter_by_key(
+    let ends = scatter_by_key(
         0..n,
         &|i| (key(i) >> 16) as usize,
         1 << 16,
@@ -355,15 +334,14 @@ where
     );
     let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(1 << 16);
     let mut rest = pairs.as_mut_slice();
-    for k in 0..1 << 16 {
-        let end = firsts
-            .first()
-            .and_then(|f| f.get(k + 1))
-            .map_or(n, |&s| s as usize);
-        let start = n - rest.len();
-        let (head, tail) = rest.split_at_mut(end - start);
-        buckets.push(head);
-        rest = tail;
+    if let Some(last) = ends.last() {
+        let mut start = 0;
+        for &end in last {
+            let (head, tail) = rest.split_at_mut(end as usize - start);
+            buckets.push(head);
+            rest = tail;
+            start = end as usize;
+        }
     }
     // Each bucket's pairs are in id order: sorting them stably by the low
     // 16 bits of the key leaves them in (key, id) order. Each thread's
@@ -578,7 +556,7 @@ mod tests {
                 let mut chunks = Vec::new();
                 view.for_each_chunk(range.clone(), |ids| chunks.extend_from_slice(ids));
                 proptest::prop_assert_eq!(&chunks[..], &plain[range]);
-                proptest::prop_assert_eq!(packed.into_ids(), plain);
+                proptest::prop_assert_eq!(view.read(0..n, &mut buf), &plain[..]);
             }
         }
     }

@@ -173,13 +173,9 @@ pub fn merge(
     progress.check(0, 1)?;
 
     // A and B from the parents, before the parents become children lists.
-    let a_of = first_chain_top(&parent, |u, x| u > x);
+    let a_of = chain_tops(&parent, true);
     progress.check(0, 1)?;
-    let mut b_of = first_chain_top(&parent, |u, x| u < x);
-    // B ends at the root only if no ancestor is higher: then there is none.
-    for b in b_of.iter_mut().filter(|b| **b == 0) {
-        *b = NONE;
-    }
+    let b_of = chain_tops(&parent, false);
     progress.check(0, 1)?;
 
     // Children lists of the rooted tree.
@@ -271,33 +267,28 @@ pub fn merge(
 }
 
 /// For every candidate `x` but the root, the last of its ancestors
-/// (inclusive) before the first one `u` with `beyond(u, x)` false: A(x)
-/// with `beyond = >` (the first ancestor lower than x ends the chain),
-/// B(x) with `<`; the root where every ancestor is beyond. `NONE` at the
-/// root.
+/// (inclusive) before the first one lower than x (`lower`: A(x)) or
+/// higher (B(x)); `NONE` if there is no such ancestor (B of a candidate
+/// higher than all its ancestors) and at the root.
 ///
-/// Candidates are visited in the order `beyond` sets (from the highest
-/// down for A); those visited, `beyond(u, x)` at x, hang from the others
-/// in chains, and x's answer is the top of its chain. `up[c]` points to a
-/// visited ancestor of `c` in its chain, at first its parent, and finding
-/// a top compresses the path to it; a top stays in its chain when its
-/// parent is visited later, so the pointers stay valid. 4 bytes per
-/// candidate beside the answer, and no stack as deep as the tree.
-fn first_chain_top(parent: &[u32], beyond: impl Fn(u32, u32) -> bool) -> Vec<u32> {
+/// Candidates are visited from the highest down for A (the lowest up for
+/// B); the visited ones hang from the others in chains, and x's answer is
+/// the top of its chain when x is visited. `up[c]` points to a visited
+/// ancestor of `c` in its chain, at first its parent, and finding a top
+/// compresses the path to it; a top stays in its chain when its parent is
+/// visited later, so the pointers stay valid. 4 bytes per candidate beside
+/// the answer, and no stack as deep as the tree.
+fn chain_tops(parent: &[u32], lower: bool) -> Vec<u32> {
     let k = parent.len();
     let mut up = crate::pages::copied(Vec::new(), parent);
     let mut top = crate::pages::filled(k, NONE);
-    // From the highest down if the candidates beyond x are higher.
-    let descending = k > 1 && beyond(1, 0);
     for i in 1..k {
-        let x = if descending { k - i } else { i } as u32;
+        let x = if lower { k - i } else { i } as u32;
+        // Visited before x: higher than x for A, lower for B.
+        let visited = |u: u32| u != NONE && (u > x) == lower;
         let mut t = x;
-        loop {
-            let u = up[t as usize];
-            if u == NONE || !beyond(u, x) {
-                break;
-            }
-            t = u;
+        while visited(up[t as usize]) {
+            t = up[t as usize];
         }
         let mut c = x;
         while c != t {
@@ -305,7 +296,8 @@ fn first_chain_top(parent: &[u32], beyond: impl Fn(u32, u32) -> bool) -> Vec<u32
             up[c as usize] = t;
             c = next;
         }
-        top[x as usize] = t;
+        // A chain up to the root (candidate 0) has nothing beyond it.
+        top[x as usize] = if t == 0 { NONE } else { t };
     }
     top
 }
