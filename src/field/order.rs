@@ -332,16 +332,17 @@ where
         &mut pairs,
         |i| ((key(i) as u64) << 32) | i as u64,
     );
+    // The last chunk's ends are the buckets' ends; the other rows (4 bytes
+    // per key and chunk: megabytes) go at once.
+    let bucket_ends = ends.into_iter().last().unwrap_or_default();
     let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(1 << 16);
     let mut rest = pairs.as_mut_slice();
-    if let Some(last) = ends.last() {
-        let mut start = 0;
-        for &end in last {
-            let (head, tail) = rest.split_at_mut(end as usize - start);
-            buckets.push(head);
-            rest = tail;
-            start = end as usize;
-        }
+    let mut start = 0;
+    for end in bucket_ends {
+        let (head, tail) = rest.split_at_mut(end as usize - start);
+        buckets.push(head);
+        rest = tail;
+        start = end as usize;
     }
     // Each bucket's pairs are in id order: sorting them stably by the low
     // 16 bits of the key leaves them in (key, id) order. Each thread's
