@@ -27,10 +27,15 @@
 //! order the leaves were cut in.
 //!
 //! **Supernodes and superarcs.** Supernodes are the candidates with other
-//! than one child in each tree. A depth-first pass from the root numbers
-//! the candidates in pre-order (`tin`, and `tout` past their subtree) and
-//! labels each candidate's edge to its parent with its superarc: the edges
-//! through a candidate that is not a supernode belong to one superarc.
+//! than one child in each tree. The candidates are numbered in a pre-order
+//! of the rooted tree (`tin`, and `tout` past their subtree) and each
+//! candidate's edge to its parent is labelled with its superarc: the edges
+//! through a candidate that is not a supernode belong to one superarc. No
+//! depth-first search is needed: the order in which Fig. 9 cut the
+//! candidates lists each one after its children (it was a leaf when cut),
+//! so one pass in that order sums the subtree sizes and one in the reverse
+//! order, from the root down, gives each child the next free range inside
+//! its parent's and the label of the edge above it.
 //!
 //! **Placing a vertex that is not a candidate.** Let `v` lie on the edge
 //! `e` between candidates `U` (above) and `L` (below), and let `a` and `b`
@@ -53,24 +58,27 @@
 //!
 //! So `e` is the edge above `A(a)` unless `b` lies in the subtree of `A(a)`
 //! (`tin[A(a)] <= tin[b] < tout[A(a)]`), and then the edge above `B(b)`.
-//! `A` and `B` come from the parents alone, before the depth-first pass:
-//! visiting the candidates from the highest down, those visited so far
-//! hang from the others in chains, and `A(x)` is the top of `x`'s chain
-//! when `x` is visited (a find with path compression; `B` the same from
-//! the lowest up). Nearly O(c) for c candidates and 4 bytes each beside
-//! the answers: the monotone stacks this replaced (restored as a
-//! depth-first pass backs up) cost 24 bytes per level of a path that, on
-//! a noisy scan, is about as long as the candidates are many. The pass
-//! itself then keeps per candidate its pre-order range and superarc in one
-//! record. Per vertex the rule reads `a`, `b` (sequentially, in id order),
-//! then `A(a)`, `B(b)` and the records of `A(a)`, `b` and `B(b)`: no walk,
-//! no order.
+//! `A` and `B` come from the parents alone: visiting the candidates from
+//! the highest down, those visited so far hang from the others in chains,
+//! and `A(x)` is the top of `x`'s chain when `x` is visited (a find with
+//! path compression; `B` the same from the lowest up). Nearly O(c) for c
+//! candidates and 4 bytes each beside the answers: the monotone stacks of
+//! a depth-first pass (restored as it backs up) would cost 24 bytes per
+//! level of a path that, on a noisy scan, is about as long as the
+//! candidates are many. Per vertex the rule reads `a`, `b` (sequentially,
+//! in id order), then `A(a)`, `B(b)` and the records of `A(a)`, `b` and
+//! `B(b)`: no walk, no order.
 //!
-//! **Memory** (n vertices, c candidates, beyond the values): 8 bytes per
-//! vertex (the two leafward arrays) and, at the depth-first pass, about
-//! 40 per candidate (the supernode, A, B, the record, the children lists
-//! and the path), plus the supernodes and superarcs (about 36 bytes per
-//! superarc): 56 per candidate in all at the peak on the scans measured.
+//! **Memory** (n vertices, c candidates, s supernodes, beyond the values):
+//! 8 bytes per vertex (the two leafward arrays) and, at the merge's peak
+//! (the chains), 24 per candidate (the parents, the records, the chain
+//! pointers and answers, one bit for "is a supernode" with a count per 64
+//! in place of a table of supernode numbers) plus 20 per supernode (the
+//! supernodes and superarcs, allocated at their exact size). About half
+//! the candidates of a scan are supernodes: 34 per candidate by this
+//! count, 37-41 measured on tooth, engine and colin27_ch2 (56 with the
+//! depth-first pass and a table of supernode numbers). The cut order
+//! shares one array with the stack of leaves waiting to be cut.
 //!
 //! Finally the regular vertices of each superarc are laid out in the vertex
 //! order by one counting pass over the order (the one pass that reads the
@@ -90,9 +98,8 @@ pub(super) const NODE_FLAG: u32 = 1 << 31;
 pub struct CandidateTree {
     nodes: Vec<Node>,
     arcs: Vec<Superarc>,
-    /// Per candidate: `NODE_FLAG | node` for a supernode, otherwise the
-    /// superarc it lies inside.
-    candidate_place: Vec<u32>,
+    /// Which candidates are supernodes, and their numbers.
+    supernodes: Supernodes,
     /// Per candidate `a`: A(a) (`NONE` at the root).
     a_of: Vec<u32>,
     /// Per candidate `b`: B(b) (`NONE` if it has none).
@@ -117,17 +124,17 @@ pub fn merge(
     let (mut st_parent, mut st_down) = (split.0.parent, split.0.children);
     debug_assert_eq!(jt_parent.len(), k);
 
-    // Supernodes, in vertex order.
-    let mut node_of = crate::pages::filled(k, NONE);
-    let mut nodes = Vec::new();
+    // Supernodes, in vertex order (counted first: on a noisy scan about
+    // half the candidates, so no vector grown by doubling).
+    let supernode = Supernodes::new(k, |c| jt_up[c] != 1 || st_down[c] != 1);
+    let supernodes = supernode.count();
+    let mut nodes = Vec::with_capacity(supernodes);
     for c in 0..k {
-        let (up, down) = (jt_up[c], st_down[c]);
-        if up != 1 || down != 1 {
-            node_of[c] = nodes.len() as u32;
+        if supernode.is_node(c as u32) {
             nodes.push(Node {
                 vertex: candidate_vertex[c],
-                up: up as u32,
-                down: down as u32,
+                up: jt_up[c] as u32,
+                down: st_down[c] as u32,
             });
         }
     }
@@ -135,15 +142,26 @@ pub fn merge(
     drop(candidate_vertex);
 
     // Fig. 9 on the candidates; the global minimum (candidate 0) is last.
+    // `cut` holds the candidates cut so far, in the order they were cut,
+    // at its front, and the leaves waiting to be cut as a stack at its
+    // back: each candidate is in one of the two at most once, so they
+    // never meet.
     let mut parent = crate::pages::filled(k, NONE);
-    let mut leaves: Vec<u32> = (1..k as u32)
-        .filter(|&c| jt_up[c as usize] + st_down[c as usize] == 1)
-        .collect();
-    let mut cut = 0usize;
-    while let Some(x) = leaves.pop() {
-        cut += 1;
-        if cut.is_multiple_of(1 << 20) {
-            progress.check(cut, k)?;
+    let mut cut = crate::pages::filled(k, 0u32);
+    let (mut front, mut back) = (0usize, k);
+    for c in 1..k {
+        if jt_up[c] + st_down[c] == 1 {
+            back -= 1;
+            cut[back] = c as u32;
+        }
+    }
+    while back < k {
+        let x = cut[back];
+        back += 1;
+        cut[front] = x;
+        front += 1;
+        if front.is_multiple_of(1 << 20) {
+            progress.check(front, k)?;
         }
         let xi = x as usize;
         let y = if jt_up[xi] == 0 {
@@ -161,84 +179,72 @@ pub fn merge(
         parent[xi] = y;
         let yi = y as usize;
         if y != 0 && jt_up[yi] + st_down[yi] == 1 {
-            leaves.push(y);
+            back -= 1;
+            cut[back] = y;
         }
     }
     debug_assert_eq!(
-        cut,
+        front,
         k.saturating_sub(1),
         "every candidate but the root is cut"
     );
-    drop((jt_parent, jt_up, st_parent, st_down, leaves));
+    drop((jt_parent, jt_up, st_parent, st_down));
     progress.check(0, 1)?;
 
-    // A and B from the parents, before the parents become children lists.
-    let a_of = chain_tops(&parent, true);
-    progress.check(0, 1)?;
-    let b_of = chain_tops(&parent, false);
-    progress.check(0, 1)?;
-
-    // Children lists of the rooted tree.
-    let mut first = vec![0u32; k + 1];
-    for &p in &parent[1..] {
-        first[p as usize + 1] += 1;
+    // Pre-order ranges and superarc labels from the cut order, which lists
+    // every candidate after its children (it was a leaf when cut): subtree
+    // sizes in that order, then, from the root down in the reverse order,
+    // each child takes the next free range inside its parent's. The middle
+    // field holds the size, then the parent's next free slot, which ends as
+    // `tout`. No children lists and no path as deep as the tree.
+    let cut_order = &cut[..front];
+    let mut subtree = crate::pages::filled(k, [0u32, 1, NONE]);
+    for &x in cut_order {
+        let size = subtree[x as usize][1];
+        subtree[parent[x as usize] as usize][1] += size;
     }
-    for c in 0..k {
-        first[c + 1] += first[c];
-    }
-    let mut fill = first.clone();
-    let mut child = vec![0u32; k.saturating_sub(1)];
-    for (c, &p) in parent.iter().enumerate().skip(1) {
-        child[fill[p as usize] as usize] = c as u32;
-        fill[p as usize] += 1;
-    }
-    drop((fill, parent));
-
-    // One depth-first pass: pre-order ranges and superarc labels.
-    let mut subtree = crate::pages::filled(k, [0u32, 0, NONE]);
-    // Superarcs as (end towards the root, end away from it), candidates.
-    let mut ends: Vec<(u32, u32)> = Vec::new();
-    // The path from the root and, per depth, the next child to visit.
-    let mut path: Vec<(u32, u32)> = Vec::new();
-    let mut time = 0u32;
+    // Superarcs as (end towards the root, end away from it), candidates:
+    // one ends at each supernode but the root.
+    let mut ends: Vec<(u32, u32)> = Vec::with_capacity(supernodes.saturating_sub(1));
     if k > 0 {
-        path.push((0, first[0]));
-        time += 1;
+        subtree[0] = [0, 1, NONE];
     }
-    while let Some(&(x, i)) = path.last() {
-        if i < first[x as usize + 1] {
-            path.last_mut().expect("on the path").1 = i + 1;
-            let c = child[i as usize];
-            path.push((c, first[c as usize]));
-            let l = if x == 0 || node_of[x as usize] != NONE {
-                ends.push((x, NONE));
-                ends.len() as u32 - 1
-            } else {
-                subtree[x as usize][2]
-            };
-            subtree[c as usize] = [time, 0, l];
-            time += 1;
-            if node_of[c as usize] != NONE {
-                ends[l as usize].1 = c;
-            }
+    for &x in cut_order.iter().rev() {
+        let p = parent[x as usize];
+        let size = subtree[x as usize][1];
+        let tin = subtree[p as usize][1];
+        subtree[p as usize][1] += size;
+        let l = if supernode.is_node(p) {
+            ends.push((p, NONE));
+            ends.len() as u32 - 1
         } else {
-            subtree[x as usize][1] = time;
-            path.pop();
+            subtree[p as usize][2]
+        };
+        subtree[x as usize] = [tin, tin + 1, l];
+        if supernode.is_node(x) {
+            ends[l as usize].1 = x;
         }
     }
-    drop((child, first, path));
+    debug_assert_eq!(ends.len(), supernodes.saturating_sub(1));
+    drop(cut);
+    progress.check(0, 1)?;
+
+    // A and B from the parents; the second takes the parents themselves.
+    let a_of = chain_tops(crate::pages::copied(Vec::new(), &parent), true);
+    progress.check(0, 1)?;
+    let b_of = chain_tops(parent, false);
+    progress.check(0, 1)?;
 
     let mut arcs: Vec<Superarc> = ends
-        .iter()
-        .map(|&(r, c)| {
+        .into_iter()
+        .map(|(r, c)| {
             let (hi, lo) = if r > c { (r, c) } else { (c, r) };
             Superarc {
-                upper: NodeId(node_of[hi as usize]),
-                lower: NodeId(node_of[lo as usize]),
+                upper: NodeId(supernode.node(hi)),
+                lower: NodeId(supernode.node(lo)),
             }
         })
         .collect();
-    drop(ends);
     // Superarcs in the tree's canonical order, by (lower, upper), now: the
     // per-vertex arrays are then made in their final form.
     let mut perm: Vec<u32> = (0..arcs.len() as u32).collect();
@@ -247,23 +253,73 @@ pub fn merge(
     for (new, &old) in perm.iter().enumerate() {
         new_id[old as usize] = new as u32;
     }
-    arcs = perm.iter().map(|&a| arcs[a as usize]).collect();
     drop(perm);
     for [_, _, l] in subtree.iter_mut().filter(|s| s[2] != NONE) {
         *l = new_id[*l as usize];
     }
-    let mut candidate_place = node_of;
-    for (p, s) in candidate_place.iter_mut().zip(&subtree) {
-        *p = if *p != NONE { NODE_FLAG | *p } else { s[2] };
+    // Each superarc moved to its new place by following the cycles of the
+    // permutation (which leaves `new_id` the identity).
+    for i in 0..arcs.len() {
+        while new_id[i] as usize != i {
+            let j = new_id[i] as usize;
+            arcs.swap(i, j);
+            new_id.swap(i, j);
+        }
     }
+    drop(new_id);
     Ok(CandidateTree {
         nodes,
         arcs,
-        candidate_place,
+        supernodes: supernode,
         a_of,
         b_of,
         subtree,
     })
+}
+
+/// Which candidates are supernodes, and each supernode's number (supernodes
+/// are numbered in candidate order): one bit per candidate and a count per
+/// 64 of them, where a table of numbers would cost 4 bytes per candidate.
+struct Supernodes {
+    bits: Vec<u64>,
+    /// Per 64 candidates: the supernodes before them.
+    before: Vec<u32>,
+}
+
+impl Supernodes {
+    fn new(k: usize, is_node: impl Fn(usize) -> bool) -> Self {
+        let mut bits = vec![0u64; k.div_ceil(64)];
+        for c in (0..k).filter(|&c| is_node(c)) {
+            bits[c / 64] |= 1 << (c % 64);
+        }
+        let mut count = 0u32;
+        let before = bits
+            .iter()
+            .map(|w| {
+                let b = count;
+                count += w.count_ones();
+                b
+            })
+            .collect();
+        Supernodes { bits, before }
+    }
+
+    fn count(&self) -> usize {
+        self.before.last().map_or(0, |&b| b as usize)
+            + self.bits.last().map_or(0, |w| w.count_ones() as usize)
+    }
+
+    #[inline]
+    fn is_node(&self, c: u32) -> bool {
+        self.bits[c as usize / 64] & (1 << (c % 64)) != 0
+    }
+
+    /// The number of supernode `c`.
+    #[inline]
+    fn node(&self, c: u32) -> u32 {
+        let (w, b) = (c as usize / 64, c % 64);
+        self.before[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()
+    }
 }
 
 /// For every candidate `x` but the root, the last of its ancestors
@@ -276,11 +332,12 @@ pub fn merge(
 /// the top of its chain when x is visited. `up[c]` points to a visited
 /// ancestor of `c` in its chain, at first its parent, and finding a top
 /// compresses the path to it; a top stays in its chain when its parent is
-/// visited later, so the pointers stay valid. 4 bytes per candidate beside
-/// the answer, and no stack as deep as the tree.
-fn chain_tops(parent: &[u32], lower: bool) -> Vec<u32> {
+/// visited later, so the pointers stay valid. The pointers are the
+/// `parent` array it takes (pass a copy to keep the parents): 4 bytes per
+/// candidate beside the answer, and no stack as deep as the tree.
+fn chain_tops(parent: Vec<u32>, lower: bool) -> Vec<u32> {
     let k = parent.len();
-    let mut up = crate::pages::copied(Vec::new(), parent);
+    let mut up = parent;
     let mut top = crate::pages::filled(k, NONE);
     for i in 1..k {
         let x = if lower { k - i } else { i } as u32;
@@ -336,7 +393,7 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
     let CandidateTree {
         nodes,
         arcs,
-        candidate_place,
+        supernodes,
         a_of,
         b_of,
         subtree,
@@ -347,7 +404,12 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
         .for_each(|(js, ss)| {
             for (j, &s) in js.iter_mut().zip(ss) {
                 *j = if *j & CANDIDATE != 0 {
-                    candidate_place[(*j & !CANDIDATE) as usize]
+                    let c = *j & !CANDIDATE;
+                    if supernodes.is_node(c) {
+                        NODE_FLAG | supernodes.node(c)
+                    } else {
+                        subtree[c as usize][2]
+                    }
                 } else {
                     let [lo, hi, above_a] = match a_of[*j as usize] {
                         NONE => [0, 0, NONE],
@@ -372,16 +434,35 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
     }
 }
 
-/// Lays out the regular vertices of each superarc in the vertex `order`
-/// and assembles the tree.
-pub fn group(placed: Placed, order: OrderView<'_>) -> ContourTree {
-    let Placed {
-        nodes,
-        arcs,
-        vertex_arc,
-    } = placed;
-    let (offsets, arc_vertices) = group_by_arc(&vertex_arc, arcs.len(), order);
-    ContourTree::assemble(nodes, arcs, vertex_arc, offsets, arc_vertices)
+/// Lays out the regular vertices of each superarc in the vertex `order`:
+/// the tree's parts, which [`Grouped::into_tree`] assembles without the
+/// order (a build lets it go first).
+pub fn group(placed: Placed, order: OrderView<'_>) -> Grouped {
+    let (offsets, arc_vertices) = group_by_arc(&placed.vertex_arc, placed.arcs.len(), order);
+    Grouped {
+        placed,
+        offsets,
+        arc_vertices,
+    }
+}
+
+/// Every vertex placed and the regular ones grouped by superarc.
+pub struct Grouped {
+    placed: Placed,
+    offsets: Vec<u32>,
+    arc_vertices: Vec<u32>,
+}
+
+impl Grouped {
+    /// The contour tree.
+    pub fn into_tree(self) -> ContourTree {
+        let Placed {
+            nodes,
+            arcs,
+            vertex_arc,
+        } = self.placed;
+        ContourTree::assemble(nodes, arcs, vertex_arc, self.offsets, self.arc_vertices)
+    }
 }
 
 /// The regular vertices of each superarc in the vertex order: stable
