@@ -121,42 +121,61 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     report!(r, "split saddles:  {splits}");
     report!(r, "supernodes:     {}", tree.nodes().len());
     report!(r, "superarcs:      {}", tree.arcs().len());
+    // Collapsing and measuring a tree of tens of millions of superarcs
+    // may not fit beside it: then only the tree is reported, unless more
+    // was asked for.
+    let wants_more = args.simplify.is_some() || args.feature_size.is_some() || args.json.is_some();
     let t = Instant::now();
-    bar.stage("measures");
-    let collapsed = CollapsedTree::new(&tree, field);
-    bar.done();
-    let collapse = t.elapsed();
-    report!(
-        r,
-        "collapsed arcs: {} (zero-height arcs contracted)",
-        collapsed.num_arcs()
-    );
-    let level = if args.simplify.is_some() || args.feature_size.is_some() {
-        let t = Instant::now();
-        bar.stage("simplification");
-        let sim = Simplification::from_collapsed(&collapsed, args.measure);
-        let sequence = t.elapsed();
-        let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
-        if let Some(n) = args.simplify {
-            level.set_level(n);
-        } else if let Some(x) = args.feature_size {
-            level.set_feature_size(x);
+    let collapsed = match crate::simplify::memory::check_collapse(tree.arcs().len()) {
+        Ok(()) => {
+            bar.stage("measures");
+            let collapsed = CollapsedTree::new(&tree, field);
+            bar.done();
+            report!(
+                r,
+                "collapsed arcs: {} (zero-height arcs contracted)",
+                collapsed.num_arcs()
+            );
+            Some(collapsed)
         }
-        bar.done();
-        report!(
-            r,
-            "simplified:     {} arcs by {} (feature size {}, {} of {} steps; measures and collapse {:.3} s, pruning sequence {:.3} s)",
-            level.num_arcs(),
-            args.measure,
-            level.feature_size(),
-            level.step(),
-            level.simplification().steps().len(),
-            collapse.as_secs_f64(),
-            sequence.as_secs_f64(),
-        );
-        Some(level)
-    } else {
-        None
+        Err(e) if !wants_more => {
+            report!(r, "collapsed arcs: not computed: {e}");
+            None
+        }
+        Err(e) => anyhow::bail!("{e}"),
+    };
+    let collapse = t.elapsed();
+    let level = match (
+        &collapsed,
+        args.simplify.is_some() || args.feature_size.is_some(),
+    ) {
+        (Some(collapsed), true) => {
+            crate::simplify::memory::check_simplification(collapsed.num_arcs())?;
+            let t = Instant::now();
+            bar.stage("simplification");
+            let sim = Simplification::from_collapsed(collapsed, args.measure);
+            let sequence = t.elapsed();
+            let mut level = SimplifiedTree::new(std::sync::Arc::new(sim));
+            if let Some(n) = args.simplify {
+                level.set_level(n);
+            } else if let Some(x) = args.feature_size {
+                level.set_feature_size(x);
+            }
+            bar.done();
+            report!(
+                r,
+                "simplified:     {} arcs by {} (feature size {}, {} of {} steps; measures and collapse {:.3} s, pruning sequence {:.3} s)",
+                level.num_arcs(),
+                args.measure,
+                level.feature_size(),
+                level.step(),
+                level.simplification().steps().len(),
+                collapse.as_secs_f64(),
+                sequence.as_secs_f64(),
+            );
+            Some(level)
+        }
+        _ => None,
     };
     let layout = match (&level, args.layout) {
         (Some(level), true) => {
@@ -220,10 +239,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut json = crate::tree::json::tree_json(&tree, field);
         add_geometry(&mut json, &volume, args.space);
         crate::measure::betti::ContourTopology::new(&tree, field).add_to_json(&mut json);
-        if let Some(obj) = json.as_object_mut() {
+        if let (Some(obj), Some(collapsed)) = (json.as_object_mut(), &collapsed) {
             obj.insert(
                 "collapsed".into(),
-                crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
+                crate::simplify::json::collapsed_tree_json(collapsed, &tree),
             );
             if let Some(level) = &level {
                 let mut simplified = crate::simplify::json::simplified_tree_json(level, &tree);

@@ -54,6 +54,7 @@ pub mod collapse;
 pub mod json;
 pub mod layout;
 mod level_set;
+pub mod memory;
 pub mod overview;
 
 pub use crate::measure::geometric::Measure;

@@ -119,7 +119,10 @@ pub fn run(request: Request, measure: Measure, progress: &Progress) -> JobResult
     }
     progress.stage("simplify");
     let t = Instant::now();
+    let too_big = |e: crate::simplify::memory::OutOfMemory| JobError::Input(format!("{name}: {e}"));
+    crate::simplify::memory::check_collapse(tree.arcs().len()).map_err(too_big)?;
     let collapsed = CollapsedTree::new(&tree, &field);
+    crate::simplify::memory::check_simplification(collapsed.num_arcs()).map_err(too_big)?;
     let sim = Arc::new(Simplification::from_collapsed(&collapsed, measure));
     let simplify = t.elapsed();
     if progress.is_cancelled() {
