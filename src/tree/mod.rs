@@ -21,7 +21,7 @@
 //! the vertex's link code until the sweep visits it: the union-find lives
 //! on the candidates); merge and placement the order and 8 (the two
 //! leafward arrays, the first of which becomes `vertex_arc`), then the
-//! arcs' vertex lists take the place of the second. Candidates add 20
+//! arcs' vertex lists take the place of the second. Candidates add 18
 //! bytes each during the sweeps and about 44 at the merge's peak
 //! ([`peak_bytes`]): little on smooth fields (a few per cent of the
 //! vertices), but much on noisy scans (tooth 31 %) and white noise, where
@@ -205,14 +205,14 @@ impl From<Cancelled> for BuildError {
 /// Peak bytes the engine holds beyond the values for `n` vertices of
 /// which `candidates` are candidate nodes (the module doc's account), with
 /// an order of `order_bytes` per vertex (2 packed for 8-bit values, else
-/// 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 20 per
+/// 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 18 per
 /// candidate while sweeping; 8 per vertex, the order unless it is let go
 /// (`order_remade`, see [`remakes_order`]), and 44 per candidate at the
 /// merge (its tables and the tree it builds; fitted to the peaks measured
 /// on tooth, engine and colin27_ch2, within 10 %, above all three).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    let sweeps = (order_bytes + 8) * n + 20 * k;
+    let sweeps = (order_bytes + 8) * n + 18 * k;
     let merge = 8 * n + MERGE_BYTES_PER_CANDIDATE * k;
     if order_remade {
         sweeps.max(merge)
@@ -227,8 +227,8 @@ const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
 /// 16-bit values, O(n)) and the candidates are at least 1/64 of the
-/// vertices: the merge, 24 bytes per candidate above the sweeps, would
-/// then be the peak by at least 3/8 of a byte per vertex, worth a counting
+/// vertices: the merge, 26 bytes per candidate above the sweeps, would
+/// then be the peak by at least 2/5 of a byte per vertex, worth a counting
 /// sort.
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
     counting && candidates as u64 * 64 >= n as u64

@@ -38,10 +38,11 @@
 //! vertex where it touched a code and a word.
 //!
 //! **Memory per vertex** while sweeping: 4 bytes (its word: link code,
-//! then candidate number or leafward candidate); per candidate 10 bytes
-//! (union-find, rank, parent, children). The split tree's list of the
-//! candidates' vertices (4 bytes each) is read off its words after the
-//! sweep, once the union-find is gone.
+//! then candidate number or leafward candidate); per candidate 9 bytes
+//! (union-find, parent, and one byte for the rank, which becomes the
+//! number of children once the sweep is done). The split tree's list of
+//! the candidates' vertices (4 bytes each) is read off its words after
+//! the sweep, once the union-find is gone.
 
 use crate::field::{OrderView, VertexOrder};
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
@@ -347,9 +348,10 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
     // uf[c]: ROOT | last node of the component at a root, otherwise the
     // parent in the union-find forest.
     let mut uf = crate::pages::filled(nodes, NONE);
+    // The union-find's ranks, then (once it is done) the children counts:
+    // one byte per node for both.
     let mut rank = crate::pages::filled(nodes, 0u8);
     let mut parent = crate::pages::filled(nodes, NONE);
-    let mut children = crate::pages::filled(nodes, 0u8);
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
@@ -444,7 +446,6 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
             }
             let mut root = kid;
             uf[kid as usize] = ROOT | kid;
-            let mut merged = 0u8;
             // One representative per component of the swept part of v's
             // link (inside the block).
             reps.clear();
@@ -477,13 +478,22 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
                 // last node to v.
                 let last = uf[r as usize] & !ROOT;
                 parent[last as usize] = kid;
-                merged += 1;
                 root = union(&mut uf, &mut rank, root, r, kid);
             }
-            children[kid as usize] = merged;
         }
     }
     debug_assert_eq!(next, if join { 0 } else { nodes as u32 });
+    // A node's children are the components it absorbed, each of which
+    // named it as the parent of its last node: counted now, in the ranks'
+    // bytes, rather than kept beside them during the sweep.
+    drop(uf);
+    let mut children = rank;
+    children.fill(0);
+    for &p in &parent {
+        if p != NONE {
+            children[p as usize] += 1;
+        }
+    }
     Ok(BlockTree {
         parent,
         children,
