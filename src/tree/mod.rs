@@ -34,8 +34,9 @@
 //! grouping 8 and the order (`vertex_arc`, the arcs' vertex lists); the
 //! order goes before the tree's node adjacency is made.
 //! Measured peaks (`flexiso bench`): 11.9 bytes per vertex on the 8-bit
-//! brains (7 % candidates), 10.8 on colin27_ch2better, 12.2 on a smooth
-//! float field, 14 on engine (12 %), 25 on tooth (31 %). [`check_memory`]
+//! brains (7 % candidates), 10.6 on colin27_ch2better, 12.0-12.2 on a
+//! smooth float field, 12.6 on engine (12 %), 21.6 on tooth (31 %), 16.5
+//! on a noisy 1024³ scan (28 %). [`check_memory`]
 //! refuses a build that would not fit as soon as the candidates are
 //! counted. The finished tree keeps 8 bytes (`vertex_arc` and
 //! `arc_vertices`) plus O(supernodes).
