@@ -167,12 +167,12 @@ pub fn merge(
         let y = if jt_up[xi] == 0 {
             // Upper leaf: its edge runs down the join tree.
             let start = jt_parent[xi];
-            let y = live_parent(&mut jt_parent, &parent, start);
+            let y = climb(&mut jt_parent, start, |y, _| parent[y as usize] != NONE);
             jt_up[y as usize] -= 1;
             y
         } else {
             let start = st_parent[xi];
-            let y = live_parent(&mut st_parent, &parent, start);
+            let y = climb(&mut st_parent, start, |y, _| parent[y as usize] != NONE);
             st_down[y as usize] -= 1;
             y
         };
@@ -343,37 +343,31 @@ fn chain_tops(parent: Vec<u32>, lower: bool) -> Vec<u32> {
         let x = if lower { k - i } else { i } as u32;
         // Visited before x: higher than x for A, lower for B.
         let visited = |u: u32| u != NONE && (u > x) == lower;
-        let mut t = x;
-        while visited(up[t as usize]) {
-            t = up[t as usize];
-        }
-        let mut c = x;
-        while c != t {
-            let next = up[c as usize];
-            up[c as usize] = t;
-            c = next;
-        }
+        let t = climb(&mut up, x, |_, next| visited(next));
         // A chain up to the root (candidate 0) has nothing beyond it.
         top[x as usize] = if t == 0 { NONE } else { t };
     }
     top
 }
 
-/// The nearest ancestor of `start` (inclusive) not yet cut, compressing the
-/// path to it.
+/// Follows `pointer` from `start` while `go_on(node, pointer[node])`
+/// holds, then points every node passed straight at the node it stopped
+/// at (full path compression), and returns that node: the find of Fig.
+/// 9's lazy contraction (the nearest ancestor not yet cut) and of the
+/// chains of [`chain_tops`].
 #[inline]
-fn live_parent(tree_parent: &mut [u32], cut_to: &[u32], start: u32) -> u32 {
-    let mut y = start;
-    while cut_to[y as usize] != NONE {
-        y = tree_parent[y as usize];
+pub(super) fn climb(pointer: &mut [u32], start: u32, go_on: impl Fn(u32, u32) -> bool) -> u32 {
+    let mut end = start;
+    while go_on(end, pointer[end as usize]) {
+        end = pointer[end as usize];
     }
     let mut c = start;
-    while c != y {
-        let next = tree_parent[c as usize];
-        tree_parent[c as usize] = y;
+    while c != end {
+        let next = pointer[c as usize];
+        pointer[c as usize] = end;
         c = next;
     }
-    y
+    end
 }
 
 /// Every vertex placed (see the module documentation): the supernodes,

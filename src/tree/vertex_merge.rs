@@ -127,7 +127,7 @@ fn find(uf: &mut [u32], mut x: u32) -> u32 {
 
 /// Marks `ct_next[x]` when x lies above its neighbour.
 const ABOVE: u32 = 1 << 31;
-use super::merge::NODE_FLAG;
+use super::merge::{NODE_FLAG, climb};
 
 /// The contour tree as the merge leaves it: supernodes and one arc per
 /// vertex, before superarcs are formed.
@@ -196,13 +196,13 @@ pub fn merge(
             // Upper leaf: its arc runs down the join tree. It leaves the
             // join tree as a leaf and is contracted out of the split tree.
             let start = jt_parent[xi];
-            let y = live_parent(&mut jt_parent, &ct_next, start);
+            let y = climb(&mut jt_parent, start, |y, _| ct_next[y as usize] != NONE);
             ct_next[xi] = y | ABOVE;
             jt_up[y as usize] -= 1;
             y
         } else {
             let start = st_parent[xi];
-            let y = live_parent(&mut st_parent, &ct_next, start);
+            let y = climb(&mut st_parent, start, |y, _| ct_next[y as usize] != NONE);
             ct_next[xi] = y;
             st_down[y as usize] -= 1;
             y
@@ -218,23 +218,6 @@ pub fn merge(
         vertex_arc,
         ct_next,
     })
-}
-
-/// The nearest ancestor of `y` (inclusive) not yet cut, compressing the
-/// path to it.
-#[inline]
-fn live_parent(parent: &mut [u32], ct_next: &[u32], start: u32) -> u32 {
-    let mut y = start;
-    while ct_next[y as usize] != NONE {
-        y = parent[y as usize];
-    }
-    let mut c = start;
-    while c != y {
-        let next = parent[c as usize];
-        parent[c as usize] = y;
-        c = next;
-    }
-    y
 }
 
 /// Groups the regular vertices into superarcs (see the module doc) and

@@ -97,7 +97,7 @@ pub mod families;
 pub mod heap;
 pub mod paint;
 
-use super::merge::NODE_FLAG;
+use super::merge::{NODE_FLAG, climb};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::ScalarField;
 use crate::mesh::{FreudenthalGrid, Mesh};
@@ -656,30 +656,17 @@ fn merge(join: CriticalTree, split: CriticalTree) -> Vec<u32> {
     let mut leaves: Vec<u32> = (0..t as u32)
         .filter(|&v| v as usize != global_min && jc[v as usize] + sc[v as usize] == 1)
         .collect();
-    let live = |parent: &mut [u32], cut: &[bool], start: u32| {
-        let mut y = start;
-        while cut[y as usize] {
-            y = parent[y as usize];
-        }
-        let mut c = start;
-        while c != y {
-            let nx = parent[c as usize];
-            parent[c as usize] = y;
-            c = nx;
-        }
-        y
-    };
     while let Some(x) = leaves.pop() {
         let xi = x as usize;
         let y = if jc[xi] == 0 {
             let start = jp[xi];
-            let y = live(&mut jp, &cut, start);
+            let y = climb(&mut jp, start, |y, _| cut[y as usize]);
             next[xi] = y | ABOVE;
             jc[y as usize] -= 1;
             y
         } else {
             let start = sp[xi];
-            let y = live(&mut sp, &cut, start);
+            let y = climb(&mut sp, start, |y, _| cut[y as usize]);
             next[xi] = y;
             sc[y as usize] -= 1;
             y
