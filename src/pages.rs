@@ -108,6 +108,23 @@ impl<'a, T> DisjointSlots<'a, T> {
         // thread touches this slot.
         unsafe { self.start.add(i).write(value) };
     }
+
+    /// The slots `range` (checked against the length), to write at once.
+    ///
+    /// # Safety
+    /// No other thread reads or writes these slots while the slice lives.
+    #[inline]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn slice(&self, range: std::ops::Range<usize>) -> &mut [T] {
+        assert!(
+            range.start <= range.end && range.end <= self.len,
+            "slots {range:?} of {}",
+            self.len
+        );
+        // SAFETY: in bounds (just checked); the caller guarantees no other
+        // thread touches these slots meanwhile.
+        unsafe { std::slice::from_raw_parts_mut(self.start.add(range.start), range.len()) }
+    }
 }
 
 /// Returns large freed arrays to the system at once: glibc's

@@ -14,8 +14,8 @@
 //! divide and conquer of Pascucci and Cole-McLaughlin).
 //!
 //! **Memory per vertex** (n vertices, beyond the field's own values): the
-//! vertex order (4 bytes, or 2 for 8-bit values, whose order is packed:
-//! [`crate::field::PackedOrder`]) plus 8, plus the candidates' share
+//! vertex order (4 bytes, or 0.6-1.2 for 8-bit values, whose order is
+//! packed: [`crate::field::PackedOrder`]) plus 8, plus the candidates' share
 //! below. The float sort holds 12 ((value, id) pairs and the order); the
 //! sweeps the order and 8 (each sweep's one word per vertex, which holds
 //! the vertex's link code until the sweep visits it: the union-find lives
@@ -205,20 +205,20 @@ impl From<Cancelled> for BuildError {
 
 /// Peak bytes the engine holds beyond the values for `n` vertices of
 /// which `candidates` are candidate nodes (the module doc's account), with
-/// an order of `order_bytes` per vertex (2 packed for 8-bit values, else
-/// 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 18 per
-/// candidate while sweeping; 8 per vertex, the order unless it is let go
-/// (`order_remade`, see [`remakes_order`]), and 44 per candidate at the
+/// an order of `order_bytes` (about 1 per vertex packed for 8-bit values,
+/// else 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 18
+/// per candidate while sweeping; 8 per vertex, the order unless it is let
+/// go (`order_remade`, see [`remakes_order`]), and 44 per candidate at the
 /// merge (its tables and the tree it builds; fitted to the peaks measured
 /// on tooth, engine and colin27_ch2, within 10 %, above all three).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    let sweeps = (order_bytes + 8) * n + 18 * k;
+    let sweeps = order_bytes + 8 * n + 18 * k;
     let merge = 8 * n + MERGE_BYTES_PER_CANDIDATE * k;
     if order_remade {
         sweeps.max(merge)
     } else {
-        merge + order_bytes * n
+        merge + order_bytes
     }
 }
 
@@ -237,7 +237,7 @@ pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
 /// once the vertex order and the link codes in the sweeps' words
-/// (`order_bytes` + 8 per vertex, already held) are counted back in: a
+/// (`order_bytes` and 8 per vertex, already held) are counted back in: a
 /// clear error instead of an allocation failure halfway through, on
 /// volumes that are large *and* noisy.
 pub fn check_memory(
@@ -248,7 +248,7 @@ pub fn check_memory(
     available: u64,
 ) -> Result<(), BuildError> {
     let needed = peak_bytes(n, candidates, order_bytes, order_remade);
-    let available = available.saturating_add((order_bytes + 8) * n as u64);
+    let available = available.saturating_add(order_bytes + 8 * n as u64);
     if needed > available {
         return Err(BuildError::OutOfMemory {
             vertices: n,
@@ -355,7 +355,7 @@ impl ContourTree {
     ) -> Result<(Self, BuildTimes), BuildError> {
         let order = source.order();
         assert_eq!(mesh.num_vertices(), order.len(), "order covers the mesh");
-        let order_bytes = order.bytes_per_vertex();
+        let order_bytes = order.bytes();
         let mut times = BuildTimes::default();
         if order.is_empty() {
             return Ok((
@@ -607,24 +607,25 @@ mod tests {
     #[test]
     fn memory_check_follows_the_candidates() {
         let gib = 1u64 << 30;
-        let n = 1usize << 30; // 1024^3 uint8: the order packed in 2 bytes
+        let n = 1usize << 30; // 1024^3 uint8: the order packed in at most 2 bytes
+        let order = 2 * n as u64;
         // A scan or smooth field (2 % candidates): 10.9 bytes per vertex.
-        assert!(check_memory(n, n / 50, 2, false, 12 * gib).is_ok());
+        assert!(check_memory(n, n / 50, order, false, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates): with the order let go
         // and remade, 20.3 bytes per vertex fit on a 24 GiB machine (12
         // GiB left beside the 10 already held); held through the merge,
         // 22.3 do not fit in 22.
         let noisy = n * 28 / 100;
-        assert!(check_memory(n, noisy, 2, true, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, 2, true, 10 * gib).is_err());
-        let e = check_memory(n, noisy, 2, false, 12 * gib).expect_err("refused");
+        assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
+        assert!(check_memory(n, noisy, order, true, 10 * gib).is_err());
+        let e = check_memory(n, noisy, order, false, 12 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
         else {
             panic!("refused for memory")
         };
-        assert_eq!(needed, peak_bytes(n, noisy, 2, false));
+        assert_eq!(needed, peak_bytes(n, noisy, order, false));
         assert_eq!(available, 12 * gib + 10 * n as u64);
         assert!(
             needed > 22 * gib,
@@ -635,8 +636,9 @@ mod tests {
         assert!(message.contains("candidate nodes"), "{message}");
         assert!(message.contains("about 44 bytes"), "{message}");
         // Exactly at the limit is allowed, a byte more is not.
-        for order_bytes in [2, 4] {
-            let held = (order_bytes + 8) * 1000;
+        for per_vertex in [1, 2, 4] {
+            let order_bytes = per_vertex * 1000;
+            let held = order_bytes + 8 * 1000;
             let peak = peak_bytes(1000, 10, order_bytes, false);
             assert!(check_memory(1000, 10, order_bytes, false, peak - held).is_ok());
             assert!(check_memory(1000, 10, order_bytes, false, peak - held - 1).is_err());
@@ -652,12 +654,13 @@ mod tests {
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
         assert!(remakes_order(n, n / 64, true));
-        for order_bytes in [2, 4] {
+        for per_vertex in [1, 2, 4] {
+            let order_bytes = per_vertex * n as u64;
             for k in [n / 64, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
-                assert!(held - remade <= order_bytes * n as u64, "{k}");
+                assert!(held - remade <= order_bytes, "{k}");
             }
         }
     }

@@ -65,9 +65,9 @@ pub(crate) use self::check_volume_size as check_dims;
 /// Peak bytes per vertex the engine needs while building the contour tree,
 /// on top of the values themselves (vertex order, the sweeps' word per
 /// vertex, then the augmented tree). The tree module owns the real figure
-/// (`crate::tree`'s module doc): the order (2 bytes for 8-bit values, else
-/// 4) and 8, plus about 44 per *candidate node* at the merge: 11-12 on
-/// smooth fields and 8-bit brains, more on noisy data (tooth 21).
+/// (`crate::tree`'s module doc): the order (about 1 byte for 8-bit values,
+/// else 4) and 8, plus about 44 per *candidate node* at the merge: 9-12 on
+/// smooth fields and 8-bit brains, more on noisy data (tooth 22).
 /// The readers check this a priori figure before reading; `flexiso info`
 /// counts the candidates and quotes `crate::tree::peak_bytes`, and the
 /// engine refuses a build that would not fit once it knows them.
