@@ -146,6 +146,30 @@ pub fn return_freed_arrays() {
 /// Asks for huge pages for the `len` bytes at `start` (allocated, not yet
 /// touched). Only whole 4 KiB pages inside the range are advised; a hint
 /// the kernel refuses is ignored.
+/// Gives the pages of `v`'s spare capacity (beyond its length) back to
+/// the system, keeping the capacity: growing into it later needs no new
+/// allocation and no copy (the pages come back, zeroed, when written).
+/// A `shrink_to_fit` followed by growth may copy the whole array.
+pub fn release_spare<T>(v: &mut Vec<T>) {
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let start = v.as_ptr() as usize + v.len() * size_of::<T>();
+        let end = v.as_ptr() as usize + v.capacity() * size_of::<T>();
+        let (first, end) = (start.next_multiple_of(PAGE), end / PAGE * PAGE);
+        if end > first {
+            // SAFETY: the pages lie inside the vector's allocation, beyond
+            // its length: nothing initialised lives there, and the kernel
+            // maps them back, zeroed, when they are touched again.
+            unsafe {
+                libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_DONTNEED);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = v;
+}
+
 fn advise(start: *const u8, len: usize) {
     #[cfg(target_os = "linux")]
     if len >= HUGE {

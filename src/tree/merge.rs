@@ -84,6 +84,7 @@
 //! order by one counting pass over the order (the one pass that reads the
 //! vertices in value order; it only reads their superarc).
 
+use super::leafward::Leafward;
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::OrderView;
@@ -383,7 +384,7 @@ pub struct Placed {
 /// becomes the tree's `vertex_arc`. Needs no vertex order: a build that
 /// let the order go makes it again only after this, when the second
 /// record and the candidates' tables are gone.
-pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: Vec<u32>) -> Placed {
+pub fn place(tree: CandidateTree, join_leafward: Leafward, split_leafward: Leafward) -> Placed {
     let CandidateTree {
         nodes,
         arcs,
@@ -392,11 +393,15 @@ pub fn place(tree: CandidateTree, mut join_leafward: Vec<u32>, split_leafward: V
         b_of,
         subtree,
     } = tree;
+    const CHUNK: usize = 1 << 14;
+    let mut join_leafward = join_leafward.into_words();
     join_leafward
-        .par_chunks_mut(1 << 14)
-        .zip(split_leafward.par_chunks(1 << 14))
-        .for_each(|(js, ss)| {
-            for (j, &s) in js.iter_mut().zip(ss) {
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each_init(Vec::new, |ss, (c, js)| {
+            ss.resize(js.len(), 0);
+            split_leafward.read(c * CHUNK, ss);
+            for (j, &s) in js.iter_mut().zip(ss.iter()) {
                 *j = if *j & CANDIDATE != 0 {
                     let c = *j & !CANDIDATE;
                     if supernodes.is_node(c) {

@@ -19,30 +19,33 @@
 //! below. The float sort holds 12 ((value, id) pairs and the order); the
 //! sweeps the order and 8 (each sweep's one word per vertex, which holds
 //! the vertex's link code until the sweep visits it: the union-find lives
-//! on the candidates); merge and placement the order and 8 (the two
-//! leafward arrays, the first of which becomes `vertex_arc`), then the
-//! arcs' vertex lists take the place of the second. Candidates add 18
-//! bytes each during the sweeps and about 44 at the merge's peak
-//! ([`peak_bytes`]): little on smooth fields (a few per cent of the
-//! vertices), but much on noisy scans (tooth 31 %) and white noise, where
-//! half the vertices are candidates. So when the order is cheap to make
-//! again (8- and 16-bit values: a counting sort in O(n), most scans) and
-//! the candidates are many, [`ContourTree::from_field`] lets the order go
-//! before the merge and sorts again after the placement, once the second
-//! leafward array and the candidates' tables are gone ([`remakes_order`]):
-//! the merge and the placement then hold 8 bytes per vertex, and the
-//! grouping 8 and the order (`vertex_arc`, the arcs' vertex lists); the
-//! order goes before the tree's node adjacency is made.
-//! Measured peaks (`flexiso bench`): 11.9 bytes per vertex on the 8-bit
-//! brains (7 % candidates), 10.6 on colin27_ch2better, 12.0-12.2 on a
-//! smooth float field, 12.6 on engine (12 %), 21.6 on tooth (31 %), 16.5
-//! on a noisy 1024³ scan (28 %). [`check_memory`]
-//! refuses a build that would not fit as soon as the candidates are
-//! counted. The finished tree keeps 8 bytes (`vertex_arc` and
-//! `arc_vertices`) plus O(supernodes).
+//! on the candidates); merge and placement the order and the two leafward
+//! records, the first of which becomes `vertex_arc`, then the arcs' vertex
+//! lists take the place of the second. The records are held in 3 bytes per
+//! vertex each from the sweeps to the placement when there are fewer than
+//! 2^23 candidates ([`leafward`], packed and unpacked in place): 6 bytes
+//! per vertex through the merge, 7 at the placement (8 otherwise).
+//! Candidates add 18 bytes each during the sweeps and about 44 at the
+//! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
+//! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
+//! where half the vertices are candidates. So when the order is cheap to
+//! make again (8- and 16-bit values: a counting sort in O(n), most scans)
+//! and the candidates are many, [`ContourTree::from_field`] lets the order
+//! go before the merge and sorts again after the placement, once the
+//! second leafward record and the candidates' tables are gone
+//! ([`remakes_order`]); the order goes again before the tree's node
+//! adjacency is made. Measured peaks (`flexiso bench`): 10-11 bytes per
+//! vertex on the 8-bit brains (7 % candidates), 9 on colin27_ch2better,
+//! 12.0-12.2 on a smooth float field, 11.5 on engine (12 %), 20 on tooth
+//! (31 %, whose finished tree alone holds 12.75), 16.5 on a noisy 1024³
+//! scan (28 %: too many candidates to pack). [`check_memory`] refuses a
+//! build that would not fit as soon as the candidates are counted. The
+//! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
+//! O(supernodes).
 
 pub mod blocks;
 pub mod json;
+mod leafward;
 mod merge;
 pub mod raichel_seshadhri;
 pub mod sweep;
@@ -52,6 +55,7 @@ mod vertex_merge;
 use crate::field::{Order, OrderView, ScalarField, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
+use leafward::Leafward;
 use merge::NODE_FLAG;
 use std::time::{Duration, Instant};
 
@@ -207,19 +211,23 @@ impl From<Cancelled> for BuildError {
 /// which `candidates` are candidate nodes (the module doc's account), with
 /// an order of `order_bytes` (about 1 per vertex packed for 8-bit values,
 /// else 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 18
-/// per candidate while sweeping; 8 per vertex, the order unless it is let
-/// go (`order_remade`, see [`remakes_order`]), and 44 per candidate at the
-/// merge (its tables and the tree it builds; fitted to the peaks measured
-/// on tooth, engine and colin27_ch2, within 10 %, above all three).
+/// per candidate while sweeping; then the order unless it is let go
+/// (`order_remade`, see [`remakes_order`]) and, at the merge, 8 per vertex
+/// and 44 per candidate (its tables and the tree it builds; fitted to the
+/// peaks measured on tooth, engine and colin27_ch2, within 10 %, above all
+/// three). With fewer than 2^23 candidates the sweeps' records are packed
+/// through the merge ([`leafward`]): 6 per vertex and 44 per candidate at
+/// the merge, 7 and 36 at the placement.
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
     let sweeps = order_bytes + 8 * n + 18 * k;
-    let merge = 8 * n + MERGE_BYTES_PER_CANDIDATE * k;
-    if order_remade {
-        sweeps.max(merge)
+    let merge = if leafward::packs(candidates) {
+        (6 * n + MERGE_BYTES_PER_CANDIDATE * k).max(7 * n + 36 * k)
     } else {
-        merge + order_bytes
-    }
+        8 * n + MERGE_BYTES_PER_CANDIDATE * k
+    };
+    let held = if order_remade { 0 } else { order_bytes };
+    sweeps.max(merge + held)
 }
 
 /// What a candidate node costs at the merge's peak (see [`peak_bytes`]).
@@ -227,12 +235,15 @@ const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
-/// 16-bit values, O(n)) and the candidates are at least 1/64 of the
-/// vertices: the merge, 26 bytes per candidate above the sweeps, would
-/// then be the peak by at least 2/5 of a byte per vertex, worth a counting
-/// sort.
+/// 16-bit values, O(n)) and the merge, without the order, would still be
+/// the peak ([`peak_bytes`]). With packed records ([`leafward`]) that takes
+/// more than 1/18 of the vertices as candidates (the placement, 18 bytes
+/// per candidate above the sweeps, then outgrows them), else 1/64 (the
+/// merge, 26 bytes per candidate above the sweeps, is then the peak by at
+/// least 2/5 of a byte per vertex, worth a counting sort).
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    counting && candidates as u64 * 64 >= n as u64
+    let per = if leafward::packs(candidates) { 18 } else { 64 };
+    counting && candidates as u64 * per > n as u64
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
@@ -388,8 +399,9 @@ impl ContourTree {
         progress.stage("merge");
         let t = Instant::now();
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
-        let join_leafward = std::mem::take(&mut join.0.leafward);
-        let split_leafward = std::mem::take(&mut split.0.leafward);
+        // Held through the merge in 3 bytes per vertex where they fit.
+        let join_leafward = Leafward::pack(std::mem::take(&mut join.0.leafward), candidates);
+        let split_leafward = Leafward::pack(std::mem::take(&mut split.0.leafward), candidates);
         if remake.is_some() {
             source.let_go();
         }
@@ -650,18 +662,30 @@ mod tests {
         let n = 1_000_000;
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
-        // bytes per vertex.
+        // bytes per vertex. With the records packed (fewer than 2^23
+        // candidates), below 1/18 of the vertices the sweeps stay the peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(remakes_order(n, n / 64, true));
+        assert!(!remakes_order(n, n / 20, true));
+        assert!(remakes_order(n, n / 16, true));
+        let huge = 1usize << 30;
+        assert!(remakes_order(huge, huge / 60, true), "unpacked: 1/64");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 64, n / 16, n / 4, n / 2] {
+            for k in [n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
+            for k in [0, n / 64, n / 20] {
+                let held = peak_bytes(n, k, order_bytes, false);
+                assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
+            }
+            let (k, order_bytes) = (huge / 60, per_vertex * huge as u64);
+            assert!(
+                peak_bytes(huge, k, order_bytes, true) < peak_bytes(huge, k, order_bytes, false)
+            );
         }
     }
     use crate::field::Values;
