@@ -481,16 +481,38 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     let ranges: Vec<std::ops::Range<usize>> = (0..n.div_ceil(chunk_len))
         .map(|c| c * chunk_len..((c + 1) * chunk_len).min(n))
         .collect();
-    let mut counts: Vec<Vec<u32>> = ranges
-        .par_iter()
-        .map(|range| {
-            let mut count = vec![0u32; arcs];
-            for_each_arc(order, vertex_arc, range.clone(), |_, a| {
-                count[a as usize] += 1
-            });
-            count
-        })
-        .collect();
+    let mut counts: Vec<Vec<u32>> = if ranges.len() == 1 {
+        // One chunk: its counts are the superarcs' sizes, which any order
+        // gives, so they are read off `vertex_arc` in id order (streaming,
+        // on every core) rather than through the order.
+        let per = n.div_ceil(threads).max(1 << 16);
+        let count = vertex_arc
+            .par_chunks(per)
+            .map(|part| {
+                let mut count = vec![0u32; arcs];
+                for &a in part.iter().filter(|&&a| a & NODE_FLAG == 0) {
+                    count[a as usize] += 1;
+                }
+                count
+            })
+            .reduce_with(|mut x, y| {
+                x.iter_mut().zip(y).for_each(|(x, y)| *x += y);
+                x
+            })
+            .unwrap_or_else(|| vec![0; arcs]);
+        vec![count]
+    } else {
+        ranges
+            .par_iter()
+            .map(|range| {
+                let mut count = vec![0u32; arcs];
+                for_each_arc(order, vertex_arc, range.clone(), |_, a| {
+                    count[a as usize] += 1
+                });
+                count
+            })
+            .collect()
+    };
     let mut offsets = vec![0u32; arcs + 1];
     let mut total = 0u32;
     for a in 0..arcs {
