@@ -174,7 +174,7 @@ fn quick() {
         );
         serial_vs_parallel(&name, &tree, &field, iso, &seed);
         scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
-        drag_while_measuring(&name, &field, iso, &seed);
+        drag_while_measuring(&name, &tree, &field, iso, &seed);
         drag_latency(&name, &tree, &field, 150_000..=250_000);
         drag_latency(&name, &tree, &field, 500_000..=1_000_000);
     }
@@ -185,12 +185,18 @@ fn quick() {
 /// another thread): new isovalue to mesh ready for upload with the
 /// measurement left to run, as before, and cancelled by the new request,
 /// as the explorer now does. Median of 3 each, alternated.
-fn drag_while_measuring(name: &str, field: &ScalarField, iso: Isovalue, seed: &PathSeed) {
+fn drag_while_measuring(
+    name: &str,
+    tree: &ContourTree,
+    field: &ScalarField,
+    iso: Isovalue,
+    seed: &PathSeed,
+) {
     use flexiso::contour::MeshTopology;
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut follower = ContourFollower::new(field);
     let last = follower
-        .extract_expecting(seed, iso, None, &|| false)
+        .extract_expecting(tree, seed, iso, None, &|| false)
         .expect("not cancelled");
     let triangles = last.num_triangles();
     let (mut left, mut cancelled, mut measuring) = (vec![], vec![], vec![]);
@@ -213,7 +219,7 @@ fn drag_while_measuring(name: &str, field: &ScalarField, iso: Isovalue, seed: &P
                 stop.store(true, Ordering::Relaxed);
             }
             let m = follower
-                .extract_expecting(seed, iso, Some(triangles), &|| false)
+                .extract_expecting(tree, seed, iso, Some(triangles), &|| false)
                 .expect("not cancelled");
             black_box(prepare(&m));
             let step = t.elapsed().as_secs_f64() * 1e3;
@@ -305,7 +311,7 @@ fn serial_vs_parallel(
     let t_parallel = best_of(5, || {
         black_box(
             parallel
-                .extract(seed, iso, &|| false)
+                .extract(tree, seed, iso, &|| false)
                 .expect("not cancelled"),
         );
     });
@@ -314,7 +320,7 @@ fn serial_vs_parallel(
         .map_or(f64::NAN, |(a, b)| (b - a) / 5.0);
     let cpu0 = process_cpu();
     let m = parallel
-        .extract(seed, iso, &|| false)
+        .extract(tree, seed, iso, &|| false)
         .expect("not cancelled");
     let cpu1 = process_cpu();
     for _ in 0..4 {
@@ -346,7 +352,7 @@ fn serial_vs_parallel(
         let t_ready = best_of(5, || {
             let s = seeds.seed(tree, field, seed.arc, iso).expect("spans");
             let m = parallel
-                .extract_expecting(&s, iso, expected, &|| false)
+                .extract_expecting(tree, &s, iso, expected, &|| false)
                 .expect("not cancelled");
             let t = Instant::now();
             black_box(prepare(&m));
@@ -424,7 +430,7 @@ fn scripted_drag(
         debug_assert_eq!(seed.arc, arc);
         // As the explorer's worker: the last step's size as the hint.
         let m = parallel
-            .extract_expecting(&seed, iso, last, &|| false)
+            .extract_expecting(tree, &seed, iso, last, &|| false)
             .expect("not cancelled");
         last = Some(m.num_triangles());
         let prepared = prepare(&m);
@@ -588,7 +594,9 @@ fn incremental_drag(
             sizes.1.max(mesh.num_triangles()),
         );
         if k == 1 || k == steps {
-            let want = check.extract(&seed, iso, &|| false).expect("not cancelled");
+            let want = check
+                .extract(tree, &seed, iso, &|| false)
+                .expect("not cancelled");
             assert_eq!(
                 (mesh.num_triangles(), mesh.positions.len()),
                 (want.num_triangles(), want.positions.len()),
@@ -662,7 +670,7 @@ fn drag_latency(
             break;
         };
         let mesh = follower
-            .extract_expecting(&seed, iso, last, &|| false)
+            .extract_expecting(tree, &seed, iso, last, &|| false)
             .expect("not cancelled");
         last = Some(mesh.num_triangles());
         // As the explorer's worker does: the mesh is made ready for the
@@ -674,7 +682,9 @@ fn drag_latency(
         black_box(prepare(&oracle.follow(&seed, iso)));
         worst_serial = worst_serial.max(t.elapsed().as_secs_f64() * 1e3);
         let t = Instant::now();
-        let swept = sweep.extract(&seed, iso, &|| false).expect("not cancelled");
+        let swept = sweep
+            .extract(tree, &seed, iso, &|| false)
+            .expect("not cancelled");
         black_box(prepare(&swept));
         worst_sweep = worst_sweep.max(t.elapsed().as_secs_f64() * 1e3);
         let (mut upload, mut render, mut frames) = (0.0, 0.0, 0);

@@ -119,7 +119,9 @@ fn check_parallel_extraction(name: &str, isovalues: &[f64], min_triangles: usize
                 break;
             }
             let at = format!("{name} h = {h}, arc {:?}", seed.arc);
-            let got = fast.extract(seed, iso, &|| false).expect("not cancelled");
+            let got = fast
+                .extract(&tree, seed, iso, &|| false)
+                .expect("not cancelled");
             assert_eq!(got.positions.len(), want.positions.len(), "{at}: vertices");
             assert_eq!(got.normals.len(), got.positions.len(), "{at}: normals");
             assert_eq!(got.touches_boundary, want.touches_boundary, "{at}");

@@ -5,7 +5,7 @@
 use flexiso::contour::oracle::{all_contours_by_following, marching_tetrahedra};
 use flexiso::contour::topology::triangle_area;
 use flexiso::contour::{
-    ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, SweepCost, all_contours,
+    ContourFollower, ContourMesh, MeshTopology, PathSeed, PathSeeds, all_contours,
     contours_through, path_seed, path_seed_in_chain,
 };
 use flexiso::field::{Isovalue, ScalarField, Values};
@@ -509,7 +509,7 @@ proptest! {
                 continue;
             };
             let want = oracle.follow(&seed, iso);
-            let got = fast.extract(&seed, iso, &|| false).expect("not cancelled");
+            let got = fast.extract(&tree, &seed, iso, &|| false).expect("not cancelled");
             assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}"));
             let t = MeshTopology::of(&got.positions, &got.indices);
             prop_assert_eq!(t.euler, betti.at(ArcId(arc), &field, iso).euler);
@@ -517,10 +517,10 @@ proptest! {
     }
 
     /// A drag step's size hint (what `extract_expecting` is told) only
-    /// chooses the path: tiny (the flood), just past where the sweep may
-    /// win (the isosurface counted, then mostly followed) and huge (counted,
-    /// then swept, the sweep skipping its first pass) all give the
-    /// follower's contour, on two threads as on a 2-core machine.
+    /// chooses the path: up to the serial limit (the flood first, the
+    /// sweep if it grows past the limit) and beyond it (straight to the
+    /// sweep) all give the follower's contour, on two threads as on a
+    /// 2-core machine.
     #[test]
     fn a_size_hint_never_changes_the_contour(
         dims in (3usize..12, 3usize..12, 3usize..12),
@@ -531,8 +531,7 @@ proptest! {
         let tree = tree_of(&field);
         let iso = Isovalue::new(t);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("pool");
-        let cost = SweepCost { voxels: field.len(), threads: 2 };
-        let first = (1..).find(|&e| cost.sweep_may_win(e)).expect("some size");
+        let limit = flexiso::contour::follow::serial_limit(field.len(), 2);
         let mut oracle = ContourFollower::new(&field);
         let mut fast = ContourFollower::new(&field);
         for arc in 0..tree.arcs().len() as u32 {
@@ -540,9 +539,9 @@ proptest! {
                 continue;
             };
             let want = oracle.follow(&seed, iso);
-            for hint in [None, Some(1), Some(first), Some(1 << 40)] {
+            for hint in [None, Some(1), Some(limit), Some(limit + 1), Some(1 << 40)] {
                 let got = pool
-                    .install(|| fast.extract_expecting(&seed, iso, hint, &|| false))
+                    .install(|| fast.extract_expecting(&tree, &seed, iso, hint, &|| false))
                     .expect("not cancelled");
                 assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}, hint {hint:?}"));
             }
@@ -567,7 +566,7 @@ proptest! {
                 continue;
             };
             let want = oracle.follow(&seed, iso);
-            let got = fast.extract(&seed, iso, &|| false).expect("not cancelled");
+            let got = fast.extract(&tree, &seed, iso, &|| false).expect("not cancelled");
             assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}"));
             let t = MeshTopology::of(&got.positions, &got.indices);
             prop_assert_eq!(t.euler, betti.at(ArcId(arc), &field, iso).euler);
@@ -603,7 +602,7 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
         // How many times an uncancelled extraction asks.
         let asked = AtomicUsize::new(0);
         let whole = follower
-            .extract(&seed, iso, &|| {
+            .extract(&tree, &seed, iso, &|| {
                 asked.fetch_add(1, Ordering::Relaxed);
                 false
             })
@@ -613,7 +612,7 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
         assert!(asked >= 2, "limit {limit}: asked {asked} times");
         for stop_at in [1, 2, asked / 2, asked] {
             let calls = AtomicUsize::new(0);
-            let r = follower.extract(&seed, iso, &|| {
+            let r = follower.extract(&tree, &seed, iso, &|| {
                 calls.fetch_add(1, Ordering::Relaxed) + 1 >= stop_at
             });
             assert_eq!(
@@ -622,7 +621,7 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
                 "limit {limit}, cancelled at call {stop_at} of {asked}"
             );
             let again = follower
-                .extract(&seed, iso, &|| false)
+                .extract(&tree, &seed, iso, &|| false)
                 .expect("not cancelled");
             assert_same_contour(&again, &want, &format!("limit {limit}, after a cancel"));
         }

@@ -199,7 +199,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // large one to the parallel sweep; see ContourFollower::extract).
         [seed] => vec![
             ContourFollower::new(field)
-                .extract(seed, iso, &|| false)
+                .extract(&tree, seed, iso, &|| false)
                 .unwrap_or_else(|_| ContourMesh::empty(seed.arc, iso.value)),
         ],
         _ => contour::contours_through(&tree, field, &seeds, iso),

@@ -24,10 +24,11 @@
 //! **On every core.** The flood is one thread's walk: fine for the small
 //! contours most picks and drags touch, but a head or brain surface of an
 //! MRI holds millions of triangles. [`ContourFollower::extract`] floods
-//! for at most [`SERIAL_TRIANGLES`] triangles and then hands the contour
-//! to the parallel sweep (`super::sweep`, [`contour_by_sweep`]): every cube
-//! layer of the volume marched on all cores, the triangles' components by
-//! union-find, the seed's component kept. The same case tables, edge
+//! for at most [`serial_limit`] triangles and then hands the contour to
+//! the parallel sweep (`super::sweep`, [`contour_by_sweep`]): every cube
+//! layer of the volume marched on all cores, each vertex given its side of
+//! the contour by the tree ([`CutSides`](super::seed::CutSides)), so only
+//! this contour's tetrahedra are crossed. The same case tables, edge
 //! interpolation and vertex sharing make it the same mesh, vertices and
 //! triangles renumbered; [`ContourFollower::follow`], the flood alone,
 //! stays as the tests' oracle. Both stop when a cancel check says a newer
@@ -40,11 +41,12 @@
 
 pub use super::marching::{Cancelled, IdBuildHasher, IdHasher, gradient_normals, vertex_normals};
 use super::marching::{TetTables, corner, edge_fraction};
-use super::sweep::{SweepScratch, contour_by_sweep, isosurface_triangles};
+use super::sweep::{SweepScratch, contour_by_sweep};
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
+use crate::tree::ContourTree;
 
 /// One tetrahedron waiting in the flood: cube origin (id and coordinates)
 /// and permutation.
@@ -63,27 +65,31 @@ pub const SERIAL_TRIANGLES: usize = 60_000;
 
 /// How many triangles the serial flood emits, for a contour of unknown
 /// size, before it hands over to the parallel sweep, for a volume of
-/// `voxels` on `threads` cores: `t = 40 V / (125 P - 47)`, a fifth of the
-/// voxels on 2 cores, a fiftieth on 16. This is deliberately later than
-/// the point where the sweep of a contour that is the whole isosurface
-/// would be faster ([`SweepCost`]): a small contour beside a large one
-/// (the ventricles at the scalp's isovalue) must not pay for the whole
-/// isosurface. A contour whose size is known (a drag step) is sent the
-/// cheaper way by [`SweepCost`] instead.
+/// `voxels` on `threads` cores: where following and sweeping for a contour
+/// of that size cost the same ([`SweepCost`]), so a contour of any size
+/// costs at most twice the cheaper way (what it would cost were its size
+/// known), a fifth of that when it is small. About 215k triangles for
+/// colin27 (7.1 M voxels) on 2 cores, 19k (raised to [`SERIAL_TRIANGLES`])
+/// on 16.
 pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
         return usize::MAX;
     }
-    let t = 40.0 * voxels as f64 / (125.0 * threads as f64 - 47.0);
-    (t as usize).max(SERIAL_TRIANGLES)
+    let (f, v, t) = (
+        SweepCost::FOLLOW_NS,
+        SweepCost::VOXEL_NS,
+        SweepCost::CONTOUR_NS,
+    );
+    let even = v * voxels as f64 / (f * threads as f64 - t);
+    (even as usize).max(SERIAL_TRIANGLES)
 }
 
 /// What following a contour and sweeping for it cost, in nanoseconds of
-/// wall time. Measured on colin27_ch2 and colin27_ch2better at seven
-/// isovalues each (2026-12-03, release, 2 threads, CPU time of all
-/// threads): following costs 96-171 ns per triangle on one thread, the
-/// sweep about 5 ns per voxel plus 57-80 ns per triangle of the whole
-/// isosurface, spread over the cores.
+/// wall time. Measured on colin27_ch2 and colin27_ch2better (release, 2
+/// threads, CPU time of all threads): following costs 96-171 ns per
+/// triangle on one thread; the sweep, which marches the contour alone
+/// (its vertices' sides from the tree), about 7 ns per voxel plus 65 ns
+/// per triangle of the contour, spread over the cores.
 #[derive(Clone, Copy, Debug)]
 pub struct SweepCost {
     /// Voxels of the volume.
@@ -94,27 +100,18 @@ pub struct SweepCost {
 
 impl SweepCost {
     const FOLLOW_NS: f64 = 115.0;
-    const VOXEL_NS: f64 = 5.0;
-    const ISOSURFACE_NS: f64 = 65.0;
+    const VOXEL_NS: f64 = 7.0;
+    const CONTOUR_NS: f64 = 65.0;
 
     /// Following a contour of `triangles`.
     pub fn follow(&self, triangles: usize) -> f64 {
         Self::FOLLOW_NS * triangles as f64
     }
 
-    /// Sweeping for one contour where the whole isosurface has
-    /// `isosurface` triangles.
-    pub fn sweep(&self, isosurface: usize) -> f64 {
-        (Self::VOXEL_NS * self.voxels as f64 + Self::ISOSURFACE_NS * isosurface as f64)
+    /// Sweeping for a contour of `triangles`.
+    pub fn sweep(&self, triangles: usize) -> f64 {
+        (Self::VOXEL_NS * self.voxels as f64 + Self::CONTOUR_NS * triangles as f64)
             / self.threads.max(1) as f64
-    }
-
-    /// True when a contour of `triangles` may be cheaper to sweep for:
-    /// the sweep's cost at its least (the isosurface being that contour
-    /// alone) is below following it. Below this, counting the isosurface
-    /// is not worth its pass.
-    pub fn sweep_may_win(&self, triangles: usize) -> bool {
-        self.threads >= 2 && self.sweep(triangles) < self.follow(triangles)
     }
 }
 
@@ -280,35 +277,34 @@ impl<'f> ContourFollower<'f> {
     /// [`ContourFollower::follow`] gives (the same oriented triangles on
     /// the same shared vertices; vertices and triangles possibly in
     /// another order), or [`Cancelled`] soon after `cancel` answers true.
+    /// `tree` is the augmented contour tree of the field (the seed's).
     ///
     /// A small contour is followed on this thread; one that grows past
-    /// [`SERIAL_TRIANGLES`] is handed to the parallel sweep, which marches
-    /// every cube layer of the volume on all cores, tells the components
-    /// apart by union-find and keeps only the seed's (see `super::sweep`).
-    /// So the cost is the flood's for small contours and, for large ones,
-    /// a pass over the volume plus the isosurface's triangles spread over
-    /// the cores. `cancel` is asked every few thousand tetrahedra of the
-    /// flood, between the sweep's phases and before each of its cube
-    /// layers; it must be cheap (an atomic load).
+    /// [`serial_limit`] is handed to the parallel sweep, which marches
+    /// every cube layer of the volume on all cores, each vertex given its
+    /// side of this contour by the tree (see `super::sweep`). So the cost
+    /// is the flood's for small contours and, for large ones, a pass over
+    /// the volume plus the contour's triangles spread over the cores.
+    /// `cancel` is asked every few thousand tetrahedra of the flood,
+    /// between the sweep's phases and before each of its cube layers; it
+    /// must be cheap (an atomic load).
     pub fn extract(
         &mut self,
+        tree: &ContourTree,
         seed: &PathSeed,
         iso: Isovalue,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<ContourMesh, Cancelled> {
-        self.extract_expecting(seed, iso, None, cancel)
+        self.extract_expecting(tree, seed, iso, None, cancel)
     }
 
     /// [`ContourFollower::extract`] told how many triangles the contour
-    /// had a moment ago (the last drag step). When the sweep could be the
-    /// cheaper way for that size, the whole isosurface is counted first
-    /// (the sweep's first pass, which it then skips) and [`SweepCost`]
-    /// chooses: a large contour that is most of the isosurface goes
-    /// straight to the sweep, a large one beside a larger isosurface is
-    /// followed. Only the path taken depends on `expected`, never the
-    /// mesh.
+    /// had a moment ago (the last drag step): one large enough that the
+    /// sweep is the cheaper way ([`SweepCost`]) goes straight to the
+    /// sweep. Only the path taken depends on `expected`, never the mesh.
     pub fn extract_expecting(
         &mut self,
+        tree: &ContourTree,
         seed: &PathSeed,
         iso: Isovalue,
         expected: Option<usize>,
@@ -323,22 +319,8 @@ impl<'f> ContourFollower<'f> {
             Some(l) => l,
             None => serial_limit(self.field.len(), threads),
         };
-        let cost = SweepCost {
-            voxels: self.field.len(),
-            threads,
-        };
-        // A size known from a moment ago: the cheaper way, judged with the
-        // whole isosurface counted (a pass the sweep then skips).
-        let mut marked = false;
         // How far to flood first (None: straight to the sweep).
         let flood = match expected {
-            Some(e) if self.serial_limit.is_none() && cost.sweep_may_win(e) => {
-                let isosurface = isosurface_triangles(self.field, iso, &mut self.sweep);
-                marked = true;
-                let sweep = cost.sweep(isosurface);
-                // Followed, but not much past what the sweep would cost.
-                (sweep >= cost.follow(e)).then_some((sweep / SweepCost::FOLLOW_NS) as usize)
-            }
             Some(e) if e > limit => None,
             _ => Some(limit),
         };
@@ -348,7 +330,7 @@ impl<'f> ContourFollower<'f> {
             return Ok(mesh);
         }
         self.reset();
-        match contour_by_sweep(self.field, seed, iso, &mut self.sweep, marked, cancel)? {
+        match contour_by_sweep(self.field, tree, seed, iso, &mut self.sweep, cancel)? {
             Some(mesh) => Ok(mesh),
             // Beyond the sweep's u32 ids: the flood has no such limit.
             None => Ok(self

@@ -211,6 +211,79 @@ fn for_each_neighbour(field: &ScalarField, v: u32, mut f: impl FnMut(u32)) {
     }
 }
 
+/// The two sides of one contour: the contour of superarc `arc` at a cut,
+/// a point inside the arc, splits the tree in two when it is taken out,
+/// and the *upper* side is the part that holds the arc's upper node. A
+/// vertex lies on the side its place lies on (a regular vertex of `arc`
+/// itself: on the upper side when it is above the cut).
+///
+/// **Why it matters.** The image of a mesh edge is a monotone path of the
+/// tree (module doc). An edge whose ends lie on different sides therefore
+/// passes the taken-out point, at the cut's height, which a monotone path
+/// passes once: the edge crosses the cut, and its crossing lies on this
+/// contour. Conversely the crossing of an edge on this contour is that
+/// point, where going up the tree offers only the arc's upper part and
+/// going down only its lower part: the edge's upper end is on the upper
+/// side, its lower end on the lower. So the side bit, marched in place of
+/// "above the cut", gives this contour's crossed edges and tetrahedra
+/// exactly (with the same cases: on them the side is the same as above),
+/// and no other contour's: no components to tell apart.
+///
+/// One bit per supernode and per superarc, filled by a search of the upper
+/// side (O(its supernodes)).
+#[derive(Debug)]
+pub struct CutSides {
+    arc: ArcId,
+    nodes: Vec<u64>,
+    arcs: Vec<u64>,
+}
+
+impl CutSides {
+    /// The sides of the contours of `arc` (any cut inside it).
+    pub fn new(tree: &ContourTree, arc: ArcId) -> Self {
+        let bit = |bits: &[u64], i: u32| bits[i as usize / 64] >> (i % 64) & 1 == 1;
+        let set = |bits: &mut [u64], i: u32| bits[i as usize / 64] |= 1 << (i % 64);
+        let mut nodes = vec![0u64; tree.nodes().len().div_ceil(64)];
+        let mut arcs = vec![0u64; tree.arcs().len().div_ceil(64)];
+        let top = tree.arc(arc).upper;
+        set(&mut nodes, top.0);
+        set(&mut arcs, arc.0);
+        let mut stack = vec![top];
+        while let Some(x) = stack.pop() {
+            for &d in tree.node_arcs(x) {
+                if bit(&arcs, d.0) {
+                    continue;
+                }
+                set(&mut arcs, d.0);
+                let e = tree.arc(d);
+                let y = if e.lower == x { e.upper } else { e.lower };
+                if !bit(&nodes, y.0) {
+                    set(&mut nodes, y.0);
+                    stack.push(y);
+                }
+            }
+        }
+        Self { arc, nodes, arcs }
+    }
+
+    /// The superarc whose contours these are.
+    pub fn arc(&self) -> ArcId {
+        self.arc
+    }
+
+    /// True when vertex `v` lies on the upper side; `above` says whether it
+    /// lies above the cut (asked only for the arc's own regular vertices).
+    #[inline(always)]
+    pub fn is_upper(&self, tree: &ContourTree, v: u32, above: impl FnOnce() -> bool) -> bool {
+        let (bits, i) = match tree.place(v) {
+            VertexPlace::Node(n) => (&self.nodes, n.0),
+            VertexPlace::Arc(d) if d == self.arc => return above(),
+            VertexPlace::Arc(d) => (&self.arcs, d.0),
+        };
+        bits[i as usize / 64] >> (i % 64) & 1 == 1
+    }
+}
+
 /// The contour tree rooted at its first node, by DFS: per node the arc to
 /// its parent and the interval of DFS entry times of its subtree, so "is
 /// x below this arc" is two comparisons.

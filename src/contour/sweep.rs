@@ -26,12 +26,9 @@
 //!    written straight into one array.
 //! 3. **Components** by union-find: inside a slab on the slab's own
 //!    vertices (in parallel), then the layers that join two slabs from
-//!    their triangles. For one contour ([`contour_by_sweep`]) a slab joins
-//!    each cube's vertices while the cube is marched, by a table per cube
-//!    mask of the unions that connect its pieces as its triangles do (a
-//!    spanning forest: one union per vertex beyond a piece's first).
-//!    Linking the larger root under the smaller makes every parent
-//!    smaller than its child, so one ascending pass labels everything.
+//!    their triangles. Linking the larger root under the smaller makes
+//!    every parent smaller than its child, so one ascending pass labels
+//!    everything.
 //! 4. **Arcs.** A component is the contour of the superarc whose path seed
 //!    lies on it: the seed's edge is numbered from its row's count. The
 //!    tree promises one component per spanning arc; if that ever failed,
@@ -39,34 +36,41 @@
 //!
 //! **One contour on every core** ([`contour_by_sweep`], what
 //! [`ContourFollower::extract`](super::ContourFollower::extract) uses for
-//! a large contour): steps 1 to 3 without positions or normals, then only
-//! the component of the seed's edge is kept. Its vertices get new ids in
-//! edge order (so each slab still owns a contiguous range of them), their
-//! positions and gradients are computed plane by plane for them alone
-//! (the field's gradient once per grid vertex, [`EndGradients`]),
-//! each slab compacts its own triangles in place, and the area-weighted
-//! normals are summed slab by slab as above. Cost: one pass over the
-//! volume's bytes plus every triangle at the isovalue, spread over the
-//! cores, plus the contour's own vertices; the tables are kept from call
-//! to call ([`SweepScratch`]).
+//! a large contour) needs no components: the tree says which side of that
+//! contour every vertex lies on ([`CutSides`]: the image of a mesh edge in
+//! the tree is a monotone path, so an edge joins the two sides exactly
+//! when it crosses this contour). Steps 1 and 2 run on the side bit in
+//! place of "above the cut", so the edges and tetrahedra marched are this
+//! contour's alone, with the same cases (on them the two bits agree); then
+//! positions and gradients plane by plane (the field's gradient once per
+//! grid vertex, [`EndGradients`]) and the area-weighted normals slab by
+//! slab. Cost: one pass over the volume's values and places (5 bytes per
+//! vertex for 8-bit values) plus this contour's own triangles, spread over
+//! the cores; the tables are kept from call to call ([`SweepScratch`]).
+//! (Until 2026-12-05 it marched the whole isosurface, joined components by
+//! union-find while marching and compacted the seed's: on colin27 the
+//! head's contour is 97 % of the isosurface, but a contour of a million
+//! triangles beside it paid for all 5.5 million.)
 //!
 //! **Memory is time here:** the first touch of a fresh page costs about as
 //! much as the work done on it, so the largest contour (on a scan, nearly
 //! all of the isosurface) is compacted in place in the sweep's own arrays
 //! instead of copied out, and nothing per edge is kept but the outputs:
 //! beyond them, two bytes per volume vertex (which side of the cut, the
-//! cube masks), 20 bytes per contour vertex (downhill gradient, root and
-//! label) and two dense tables of one plane per worker.
+//! cube masks), 13 bytes per contour vertex (downhill gradient, face flag;
+//! the whole isosurface also a root and a label) and two dense tables of
+//! one plane per worker.
 
 use super::marching::{
     Cancelled, TetTables, area_normal, edge_fraction, end_gradient, interpolated_downhill,
     normalize, prefer_gradient,
 };
+use super::seed::CutSides;
 use super::{ContourMesh, PathSeed};
 use crate::field::Isovalue;
 use crate::field::{Scalar, ScalarField};
 use crate::mesh::CUBE_TETRAHEDRA;
-use crate::tree::ArcId;
+use crate::tree::{ArcId, ContourTree};
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
@@ -85,11 +89,6 @@ struct SweepTables {
     pieces: [[([[CornerEdge; 3]; 2], u8); 16]; 6],
     /// Triangles in a cube, per cube mask.
     triangles: [u8; 256],
-    /// Per cube mask, pairs of the cube's contour vertices (as corner
-    /// edges) whose unions connect them as the cube's triangles do: a
-    /// spanning forest, one union per vertex beyond the first of each
-    /// piece, instead of two per triangle.
-    links: [([(CornerEdge, CornerEdge); 18], u8); 256],
 }
 
 impl SweepTables {
@@ -124,41 +123,10 @@ impl SweepTables {
                     .map(|p| pieces[p][tet_mask[p][cube] as usize].1)
                     .sum()
             });
-            let links = std::array::from_fn(|cube| {
-                // Union-find over the cube's 64 corner edges (corner * 8 +
-                // offset), joined along each tetrahedron's triangles.
-                let mut root: [u8; 64] = std::array::from_fn(|k| k as u8);
-                let find = |root: &[u8; 64], mut k: u8| {
-                    while root[k as usize] != k {
-                        k = root[k as usize];
-                    }
-                    k
-                };
-                let mut out = ([((0u8, 0u8), (0u8, 0u8)); 18], 0u8);
-                for (p, tet_masks) in tet_mask.iter().enumerate() {
-                    let (tris, count) = &pieces[p][tet_masks[cube] as usize];
-                    let corners = tris[..*count as usize].iter().flatten();
-                    let mut first: Option<CornerEdge> = None;
-                    for &(c, d) in corners {
-                        let Some(f) = first else {
-                            first = Some((c, d));
-                            continue;
-                        };
-                        let (a, b) = (find(&root, f.0 * 8 + f.1), find(&root, c * 8 + d));
-                        if a != b {
-                            root[a.max(b) as usize] = a.min(b);
-                            out.0[out.1 as usize] = (f, (c, d));
-                            out.1 += 1;
-                        }
-                    }
-                }
-                out
-            });
             SweepTables {
                 tet_mask,
                 pieces,
                 triangles,
-                links,
             }
         })
     }
@@ -243,7 +211,7 @@ fn sweep<T: Scalar>(
     sides_and_cubes(
         values,
         field.dims(),
-        iso,
+        |v, f| iso.above_value(f.to_f64(), v),
         &mut above,
         &mut cubes,
         &mut active,
@@ -311,7 +279,6 @@ fn sweep<T: Scalar>(
                 &layer_start,
                 &|| false,
                 &mut ids,
-                None,
             );
             debug_assert_eq!(written, Some(indices.len()), "triangles as counted");
             // 3. Unions inside the slab: all but the last layer, whose
@@ -491,7 +458,7 @@ const MIXED: u8 = 2;
 fn sides_and_cubes<T: Scalar>(
     values: &[T],
     dims: [usize; 3],
-    iso: Isovalue,
+    is_above: impl Fn(u32, T) -> bool + Sync,
     above: &mut Vec<u8>,
     cubes: &mut Vec<u8>,
     active: &mut Vec<bool>,
@@ -511,7 +478,7 @@ fn sides_and_cubes<T: Scalar>(
                 let first = (plane * z + nx * y) as u32;
                 let (a, f) = (&mut a[nx * y..][..nx], &f[nx * y..][..nx]);
                 for (k, (a, f)) in a.iter_mut().zip(f).enumerate() {
-                    *a = iso.above_value(f.to_f64(), first + k as u32) as u8;
+                    *a = is_above(first + k as u32, *f) as u8;
                 }
                 let up: usize = a.iter().map(|&b| b as usize).sum();
                 *side = match up {
@@ -707,7 +674,6 @@ impl Sweep<'_> {
         layer_start: &[u32],
         cancel: &(dyn Fn() -> bool + Sync),
         ids: &mut PlaneIds,
-        mut unions: Option<Unions>,
     ) -> Option<usize> {
         let [nx, ny, _] = self.dims;
         let plane = nx * ny;
@@ -751,12 +717,6 @@ impl Sweep<'_> {
                                 out[w] = id(corner);
                                 w += 1;
                             }
-                        }
-                    }
-                    if let Some(u) = unions.as_mut().filter(|u| z < u.before_layer) {
-                        let (links, count) = &tables.links[cube];
-                        for &(a, b) in &links[..*count as usize] {
-                            union(u.parent, u.first, id(a), id(b));
                         }
                     }
                 }
@@ -817,15 +777,6 @@ fn add_normal(normals: &mut [[f32; 3]], positions: &[[f32; 3]], first: u32, tri:
         s[1] += n[1];
         s[2] += n[2];
     }
-}
-
-/// The union-find a slab's march joins its cubes' vertices in, for the
-/// cube layers below `before_layer` (the last layer of a slab reaches the
-/// next slab's vertices: joined afterwards from its triangles).
-struct Unions<'a> {
-    parent: &'a mut [u32],
-    first: u32,
-    before_layer: usize,
 }
 
 /// Joins `a` and `b` in the union-find over `parent` (which holds the ids
@@ -909,17 +860,15 @@ impl EndGradients {
 /// Tables [`contour_by_sweep`] keeps from one call to the next: a fresh
 /// page costs as much as the work done on it, and a drag asks for the
 /// same sizes again and again. Two bytes per volume vertex (side of the
-/// cut, cube masks) and four per crossed edge (the union-find), sized by
-/// the largest call so far.
+/// contour, cube masks), sized by the largest call so far.
 #[derive(Default)]
 pub(crate) struct SweepScratch {
     above: Vec<u8>,
     cubes: Vec<u8>,
     active: Vec<bool>,
-    parent: Vec<u32>,
     /// Per slab, its two planes' vertex-id tables.
     plane_ids: Vec<PlaneIds>,
-    /// Per kept vertex, the downhill gradient and whether it lies on a
+    /// Per contour vertex, the downhill gradient and whether it lies on a
     /// face of the box (longer than needed after a larger contour).
     downhill: Vec<[f32; 3]>,
     on_face: Vec<bool>,
@@ -929,64 +878,43 @@ pub(crate) struct SweepScratch {
 /// (see [`Sweep::fill_ids`]).
 type PlaneIds = [Vec<u32>; 2];
 
-/// Marks a crossed edge whose vertex is not on the wanted contour.
-const DROPPED: u32 = u32::MAX;
-
-/// The single contour through `seed` at `iso` by the parallel sweep: the
-/// whole volume's crossed edges and triangles, their components by
-/// union-find, then only the seed's component kept, its positions,
-/// gradients and normals computed for its own vertices alone. The same
+/// The single contour through `seed` at `iso` by the parallel sweep, told
+/// apart from the other contours at `iso` by the tree: every vertex gets
+/// its side of this contour ([`CutSides`]) in place of its side of the
+/// cut, so the crossed edges and tetrahedra marched are this contour's
+/// alone (step 3 of the module doc is not needed), and positions,
+/// gradients and normals are computed for its own vertices only. The same
 /// triangles as following the seed (the same case tables, numbering and
 /// interpolation), its vertices in edge order, its triangles in sweep
-/// order. `Ok(None)` when the seed's edge is not crossed or the isosurface
+/// order. `Ok(None)` when the seed's edge is not crossed or the contour
 /// does not fit the sweep's `u32` ids (the caller then follows the seed);
 /// `Err` as soon as `cancel` answers true (checked between phases and
 /// before every cube layer of every slab).
-/// `marked`: the scratch already holds the sides and cube masks of
-/// this field at `iso` ([`isosurface_triangles`] just ran).
 pub(crate) fn contour_by_sweep(
     field: &ScalarField,
+    tree: &ContourTree,
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
-    marked: bool,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let dims = field.dims();
-    if dims.iter().any(|&d| d < 2) {
+    if dims.iter().any(|&d| d < 2) || tree.num_vertices() != field.len() {
         return Ok(None);
     }
-    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, seed, iso, scratch, marked, cancel))
-}
-
-/// The number of triangles of the whole isosurface at `iso` (every
-/// contour): the sweep's first pass (one pass over the values, in
-/// parallel), whose sides and cube masks stay in `scratch` for a sweep at
-/// the same value right after (`marked`).
-pub(crate) fn isosurface_triangles(
-    field: &ScalarField,
-    iso: Isovalue,
-    scratch: &mut SweepScratch,
-) -> usize {
-    let dims = field.dims();
-    if dims.iter().any(|&d| d < 2) {
-        return 0;
-    }
-    let s = scratch;
-    crate::with_values!(field.values(), v => sides_and_cubes(v.as_slice(), dims, iso, &mut s.above, &mut s.cubes, &mut s.active));
-    count_layer_triangles(&s.cubes, &s.active, dims)
-        .iter()
-        .sum()
+    let sides = CutSides::new(tree, seed.arc);
+    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, tree, &sides, seed, iso, scratch, cancel))
 }
 
 #[allow(clippy::too_many_arguments)]
 fn sweep_one<T: Scalar>(
     values: &[T],
     field: &ScalarField,
+    tree: &ContourTree,
+    sides: &CutSides,
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
-    marked: bool,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
@@ -996,18 +924,17 @@ fn sweep_one<T: Scalar>(
         above,
         cubes,
         active,
-        parent,
         plane_ids,
         downhill,
         on_face,
     } = scratch;
-    if !marked {
-        sides_and_cubes(values, dims, iso, above, cubes, active);
-    }
+    let side = |v: u32, f: T| sides.is_upper(tree, v, || iso.above_value(f.to_f64(), v));
+    sides_and_cubes(values, dims, side, above, cubes, active);
     let active: &[bool] = active;
     check()?;
 
-    // 1. Crossed edges numbered by rows (see the module doc).
+    // 1. Crossed edges numbered by rows (see the module doc): this
+    // contour's vertices.
     let row_counts = count_rows(cubes, active, nx);
     let Some(row_base) = prefix_sums(row_counts.into_iter(), u32::MAX as usize / 4) else {
         return Ok(None);
@@ -1019,21 +946,22 @@ fn sweep_one<T: Scalar>(
         active,
         row_base: &row_base,
     };
-    let Some(seed_id) = edge_id(
+    if edge_id(
         field,
         &ctx,
         seed.below.min(seed.above),
         seed.below.max(seed.above),
-    ) else {
+    )
+    .is_none()
+    {
         return Ok(None);
-    };
+    }
     let vertex_start = |z: usize| row_base[z * ny] as usize;
     let plane_lengths: Vec<usize> = (0..nz)
         .map(|z| vertex_start(z + 1) - vertex_start(z))
         .collect();
 
-    // 2. Every triangle at `iso`, slab by slab, with 3. the unions inside
-    // each slab.
+    // 2. Its triangles, slab by slab.
     let layer_triangles = count_layer_triangles(cubes, active, dims);
     let Some(layer_start) = prefix_sums(layer_triangles.iter().map(|t| 3 * t), u32::MAX as usize)
     else {
@@ -1044,50 +972,17 @@ fn sweep_one<T: Scalar>(
     let slabs = layers.min(4 * rayon::current_num_threads()).max(1);
     let cut: Vec<usize> = (0..=slabs).map(|s| s * layers / slabs).collect();
     let end_plane = |s: usize| if s + 1 == slabs { nz } else { cut[s + 1] };
-    // Where a slab's last layer starts in its own triangles: that layer
-    // reaches the next slab's first plane.
-    let inner_len = |s: usize| {
-        if s + 1 == slabs {
-            (layer_start[cut[s + 1]] - layer_start[cut[s]]) as usize
-        } else {
-            (layer_start[cut[s + 1] - 1] - layer_start[cut[s]]) as usize
-        }
-    };
-    let slab_vertices = (0..slabs).map(|s| vertex_start(end_plane(s)) - vertex_start(cut[s]));
     let slab_indices: Vec<usize> = (0..slabs)
         .map(|s| (layer_start[cut[s + 1]] - layer_start[cut[s]]) as usize)
         .collect();
-    parent.resize(n, 0);
-    parent
-        .par_chunks_mut(1 << 16)
-        .enumerate()
-        .for_each(|(c, p)| {
-            for (k, p) in p.iter_mut().enumerate() {
-                *p = ((c << 16) + k) as u32;
-            }
-        });
     plane_ids.resize_with(slabs, PlaneIds::default);
-    let marched: Vec<bool> = split_lengths(&mut parent[..], slab_vertices)
+    let marched: Vec<bool> = split_lengths(&mut indices, slab_indices.iter().copied())
         .into_par_iter()
-        .zip(split_lengths(&mut indices, slab_indices.iter().copied()))
         .zip(plane_ids.par_iter_mut())
         .enumerate()
-        .map(|(s, ((parent, indices), ids))| {
-            // The unions of every layer but a slab's last (the last slab's
-            // too), cube by cube as it is marched.
-            let unions = Unions {
-                parent,
-                first: vertex_start(cut[s]) as u32,
-                before_layer: if s + 1 == slabs {
-                    cut[s + 1]
-                } else {
-                    cut[s + 1] - 1
-                },
-            };
+        .map(|(s, (indices, ids))| {
             let layers = cut[s]..cut[s + 1];
-            let Some(written) =
-                ctx.march_slab(layers, indices, &layer_start, cancel, ids, Some(unions))
-            else {
+            let Some(written) = ctx.march_slab(layers, indices, &layer_start, cancel, ids) else {
                 return false;
             };
             debug_assert_eq!(written, indices.len(), "triangles as counted");
@@ -1097,120 +992,54 @@ fn sweep_one<T: Scalar>(
     if marched.contains(&false) {
         return Err(Cancelled);
     }
-    for s in 0..slabs - 1 {
-        let last = cut[s + 1] - 1;
-        let range = layer_start[last] as usize..layer_start[last + 1] as usize;
-        for tri in indices[range].chunks_exact(3) {
-            union_triangle(parent, 0, tri);
-        }
-    }
     check()?;
 
-    // The seed's component: parents point down, so one ascending pass
-    // leaves every vertex pointing at its root.
-    for i in 0..n {
-        parent[i] = parent[parent[i] as usize];
+    // Positions, gradients and face flags, plane by plane.
+    let mut positions = crate::pages::filled(n, [0f32; 3]);
+    // Every entry is written below: no need to clear them.
+    if downhill.len() < n {
+        *downhill = crate::pages::filled(n, [0f32; 3]);
+        *on_face = crate::pages::filled(n, false);
     }
-    let root = parent[seed_id as usize];
-    let kept_per_plane: Vec<usize> = split_lengths(&mut parent[..], plane_lengths.iter().copied())
+    let (downhill, on_face) = (&mut downhill[..n], &mut on_face[..n]);
+    let lengths = || plane_lengths.iter().copied();
+    split_lengths(&mut positions, lengths())
         .into_par_iter()
-        .map(|p| p.iter().filter(|&&r| r == root).count())
-        .collect();
-    // New vertex ids by plane (each plane's first): monotone in the old.
-    let Some(new_base) = prefix_sums(kept_per_plane.iter().copied(), u32::MAX as usize) else {
-        return Ok(None);
-    };
-    let kept = new_base[nz] as usize;
-    check()?;
-
-    // Positions, gradients and face flags of the kept vertices only; the
-    // union-find becomes the map from old ids to new (or DROPPED).
-    let mut positions = crate::pages::filled(kept, [0f32; 3]);
-    // Every kept vertex's entry is written below: no need to clear them.
-    if downhill.len() < kept {
-        *downhill = crate::pages::filled(kept, [0f32; 3]);
-        *on_face = crate::pages::filled(kept, false);
-    }
-    let (downhill, on_face) = (&mut downhill[..kept], &mut on_face[..kept]);
-    let kept_lengths = || kept_per_plane.iter().copied();
-    split_lengths(&mut parent[..], plane_lengths.iter().copied())
-        .into_par_iter()
-        .zip(split_lengths(&mut positions, kept_lengths()))
-        .zip(split_lengths(&mut *downhill, kept_lengths()))
-        .zip(split_lengths(&mut *on_face, kept_lengths()))
+        .zip(split_lengths(&mut *downhill, lengths()))
+        .zip(split_lengths(&mut *on_face, lengths()))
         .enumerate()
-        .for_each_init(EndGradients::default, |ends, (z, (((map, p), g), f))| {
-            let mut next = new_base[z];
-            for m in map.iter_mut() {
-                *m = if *m == root {
-                    next += 1;
-                    next - 1
-                } else {
-                    DROPPED
-                };
-            }
+        .for_each_init(EndGradients::default, |ends, (z, ((p, g), f))| {
             let rows = &active[ny * z..][..ny];
-            let keep = |i: usize| map[i] != DROPPED;
-            crossed_edges(values, field, cubes, rows, iso, z, keep, p, g, f, ends);
+            crossed_edges(values, field, cubes, rows, iso, z, |_| true, p, g, f, ends);
         });
-    let map: &[u32] = parent;
-    check()?;
-
-    // The kept triangles, renumbered: each slab compacts its own in place
-    // (inner layers, then the last), then the slabs close up.
-    let compacted: Vec<(usize, usize)> = split_lengths(&mut indices, slab_indices.iter().copied())
-        .into_par_iter()
-        .enumerate()
-        .map(|(s, tris)| {
-            let inner = inner_len(s);
-            let mut w = 0;
-            let mut inner_kept = 0;
-            for r in (0..tris.len()).step_by(3) {
-                if r == inner {
-                    inner_kept = w;
-                }
-                if map[tris[r] as usize] != DROPPED {
-                    for k in 0..3 {
-                        tris[w + k] = map[tris[r + k] as usize];
-                    }
-                    w += 3;
-                }
-            }
-            if inner == tris.len() {
-                inner_kept = w;
-            }
-            (inner_kept, w)
-        })
-        .collect();
-    // (start, inner end, end) of each slab's kept triangles.
-    let mut spans = Vec::with_capacity(slabs);
-    let mut w = 0;
-    let mut r = 0;
-    for (s, &(inner, total)) in compacted.iter().enumerate() {
-        indices.copy_within(r..r + total, w);
-        spans.push((w, w + inner, w + total));
-        w += total;
-        r += slab_indices[s];
-    }
-    indices.truncate(w);
     check()?;
 
     // Area-weighted normals: a slab's inner layers touch its own vertices
     // only (in parallel), its last layer the next slab's too (after).
-    let mut normals = crate::pages::filled(kept, [0f32; 3]);
-    let slab_kept = (0..slabs).map(|s| (new_base[end_plane(s)] - new_base[cut[s]]) as usize);
-    split_lengths(&mut normals, slab_kept)
+    let mut normals = crate::pages::filled(n, [0f32; 3]);
+    // Where a slab's last layer starts: that layer reaches the next slab's
+    // first plane.
+    let inner_end = |s: usize| {
+        if s + 1 == slabs {
+            layer_start[cut[s + 1]] as usize
+        } else {
+            layer_start[cut[s + 1] - 1] as usize
+        }
+    };
+    let slab_vertices = (0..slabs).map(|s| vertex_start(end_plane(s)) - vertex_start(cut[s]));
+    split_lengths(&mut normals, slab_vertices)
         .into_par_iter()
         .enumerate()
         .for_each(|(s, normals)| {
-            let first = new_base[cut[s]];
-            let (start, inner, _) = spans[s];
-            for tri in indices[start..inner].chunks_exact(3) {
+            let first = vertex_start(cut[s]) as u32;
+            let start = layer_start[cut[s]] as usize;
+            for tri in indices[start..inner_end(s)].chunks_exact(3) {
                 add_normal(normals, &positions, first, tri);
             }
         });
-    for &(_, inner, end) in &spans {
-        for tri in indices[inner..end].chunks_exact(3) {
+    for s in 0..slabs - 1 {
+        let end = layer_start[cut[s + 1]] as usize;
+        for tri in indices[inner_end(s)..end].chunks_exact(3) {
             add_normal(&mut normals, &positions, 0, tri);
         }
     }

@@ -542,6 +542,7 @@ impl ContourTree {
     }
 
     /// Where vertex `v` lies: on a superarc or at a supernode.
+    #[inline]
     pub fn place(&self, v: u32) -> VertexPlace {
         let va = self.vertex_arc[v as usize];
         if va & NODE_FLAG != 0 {

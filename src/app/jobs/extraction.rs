@@ -560,7 +560,7 @@ pub fn extract_mesh(
     };
     // On every core for a large contour (see ContourFollower::extract).
     let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
-    let mesh = follower.extract_expecting(&seed, iso, expected, cancel);
+    let mesh = follower.extract_expecting(tree, &seed, iso, expected, cancel);
     *scratch = follower.into_scratch();
     mesh.map(Some)
 }
