@@ -286,7 +286,8 @@ fn process_cpu() -> Option<f64> {
 
 /// The mesh made ready for the GPU, as the explorer's worker does.
 fn prepare(mesh: &flexiso::contour::ContourMesh) -> flexiso::render::PreparedMesh {
-    flexiso::render::PreparedMesh::new(&mesh.positions, &mesh.normals, &mesh.indices)
+    let (p, n, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
+    flexiso::render::PreparedMesh::new_wound(p, n, i, mesh.ccw_outward, Default::default())
         .expect("a contour is a valid mesh")
 }
 
@@ -415,6 +416,8 @@ fn scripted_drag(
     let (mut ser, mut par, mut frames, mut upload) = (vec![], vec![], vec![], vec![]);
     let mut sizes = (usize::MAX, 0);
     let mut last = None;
+    let mut old_meshes = std::collections::VecDeque::new();
+    let mut old_gpu = std::collections::VecDeque::new();
     for step in 1..=steps {
         let iso = Isovalue::new(iso.value + dir * step as f64);
         let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso) else {
@@ -428,20 +431,36 @@ fn scripted_drag(
         let t = Instant::now();
         let seed = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso).expect("spans");
         debug_assert_eq!(seed.arc, arc);
-        // As the explorer's worker: the last step's size as the hint.
+        // As the explorer's worker: the last step's size as the hint, the
+        // mesh and GPU form of two steps before recycled (the window holds
+        // the last one).
+        if old_meshes.len() == 2
+            && let Some(spare) = old_meshes.pop_front()
+        {
+            parallel.recycle(spare);
+        }
         let m = parallel
             .extract_expecting(tree, &seed, iso, last, &|| false)
             .expect("not cancelled");
         last = Some(m.num_triangles());
-        let prepared = prepare(&m);
+        let spare_gpu = (old_gpu.len() == 2)
+            .then(|| old_gpu.pop_front())
+            .flatten()
+            .and_then(|g| std::sync::Arc::try_unwrap(g).ok())
+            .unwrap_or_default();
+        let (p, n, i) = (&m.positions, &m.normals, &m.indices);
+        let prepared = std::sync::Arc::new(
+            flexiso::render::PreparedMesh::new_wound(p, n, i, m.ccw_outward, spare_gpu)
+                .expect("a contour is a valid mesh"),
+        );
         par.push(t.elapsed().as_secs_f64() * 1e3);
+        old_gpu.push_back(std::sync::Arc::clone(&prepared));
         sizes = (
             sizes.0.min(m.num_triangles()),
             sizes.1.max(m.num_triangles()),
         );
         if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
-            r.set_prepared_mesh(&g.device, 1, std::sync::Arc::new(prepared))
-                .expect("upload");
+            r.set_prepared_mesh(&g.device, 1, prepared).expect("upload");
             let mut n = 0;
             let mut slowest = 0f64;
             loop {
@@ -457,6 +476,7 @@ fn scripted_drag(
             frames.push(n as f64);
             upload.push(slowest);
         }
+        old_meshes.push_back(m);
     }
     incremental_drag(name, tree, field, &chain, iso, dir, steps);
     let ((sm, sw), (pm, pw)) = (stats(&ser), stats(&par));

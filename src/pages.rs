@@ -46,6 +46,20 @@ pub fn refilled<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) ->
     spare
 }
 
+/// An array of `n` elements for a caller that overwrites every one of
+/// them: `spare` itself when its allocation is large enough (what it held
+/// is left there, and only growth is filled with `value`), else [`filled`].
+/// A recycled array costs neither fresh pages nor a fill.
+pub fn reused<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
+    if spare.capacity() < n {
+        drop(spare);
+        return filled(n, value);
+    }
+    spare.truncate(n);
+    spare.resize(n, value);
+    spare
+}
+
 /// A copy of `from`, in `spare`'s allocation when that is large enough,
 /// else on huge pages when it is large; copied on every core.
 pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {

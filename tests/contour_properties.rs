@@ -423,6 +423,25 @@ proptest! {
 /// oriented triangles on as many shared vertices, the same boundary flag,
 /// the same topology, and at each position the same unit normal (up to
 /// the order the area-weighted sums were added in).
+/// Six times the signed volume a mesh encloses (divergence theorem, about
+/// its first vertex).
+fn signed_volume6(m: &ContourMesh) -> f64 {
+    let o = m.positions[0].map(f64::from);
+    let p = |i: u32| {
+        let q = m.positions[i as usize];
+        [0, 1, 2].map(|k| f64::from(q[k]) - o[k])
+    };
+    m.indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
+            a[0] * (b[1] * c[2] - b[2] * c[1])
+                + a[1] * (b[2] * c[0] - b[0] * c[2])
+                + a[2] * (b[0] * c[1] - b[1] * c[0])
+        })
+        .sum()
+}
+
 fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
     assert_eq!(fast.arc, oracle.arc, "{at}: arc");
     assert_eq!(
@@ -435,6 +454,13 @@ fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
         fast.touches_boundary, oracle.touches_boundary,
         "{at}: boundary"
     );
+    // A winding the extraction knew is the one a closed contour's
+    // triangles have.
+    if let Some(ccw) = fast.ccw_outward.filter(|_| !fast.touches_boundary) {
+        let v = signed_volume6(oracle);
+        assert!(v != 0.0, "{at}: a closed contour encloses something");
+        assert_eq!(ccw, v > 0.0, "{at}: winding seen from outside");
+    }
     assert_eq!(
         fast.triangle_soup(),
         oracle.triangle_soup(),
@@ -520,7 +546,7 @@ proptest! {
     /// chooses the path: up to the serial limit (the flood first, the
     /// sweep if it grows past the limit) and beyond it (straight to the
     /// sweep) all give the follower's contour, on two threads as on a
-    /// 2-core machine.
+    /// 2-core machine, also when written into a recycled mesh's arrays.
     #[test]
     fn a_size_hint_never_changes_the_contour(
         dims in (3usize..12, 3usize..12, 3usize..12),
@@ -534,16 +560,23 @@ proptest! {
         let limit = flexiso::contour::follow::serial_limit(field.len(), 2);
         let mut oracle = ContourFollower::new(&field);
         let mut fast = ContourFollower::new(&field);
+        let mut last = None;
         for arc in 0..tree.arcs().len() as u32 {
             let Some(seed) = path_seed(&tree, &field, ArcId(arc), iso) else {
                 continue;
             };
             let want = oracle.follow(&seed, iso);
             for hint in [None, Some(1), Some(limit), Some(limit + 1), Some(1 << 40)] {
+                // Written into the arrays of the last contour extracted
+                // (of this arc or another, larger or smaller).
+                if let Some(spare) = last.take() {
+                    fast.recycle(spare);
+                }
                 let got = pool
                     .install(|| fast.extract_expecting(&tree, &seed, iso, hint, &|| false))
                     .expect("not cancelled");
                 assert_same_contour(&got, &want, &format!("arc {arc} at {iso:?}, hint {hint:?}"));
+                last = Some(got);
             }
         }
     }

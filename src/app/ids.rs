@@ -26,7 +26,8 @@ pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
 
 /// [`prepare`] into `spare`'s arrays ([`PreparedMesh::new_reusing`]).
 pub fn prepare_reusing(mesh: &ContourMesh, spare: PreparedMesh) -> Option<Arc<PreparedMesh>> {
-    match PreparedMesh::new_reusing(&mesh.positions, &mesh.normals, &mesh.indices, spare) {
+    let (p, n, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
+    match PreparedMesh::new_wound(p, n, i, mesh.ccw_outward, spare) {
         Ok(m) => Some(Arc::new(m)),
         Err(e) => {
             eprintln!(

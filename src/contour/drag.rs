@@ -923,6 +923,7 @@ impl DraggedContour {
             normals,
             indices,
             touches_boundary: self.boundary > 0,
+            ccw_outward: None,
         })
     }
 }

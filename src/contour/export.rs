@@ -554,6 +554,7 @@ mod coloured_tests {
             normals: vec![[0.0, 0.0, 1.0]; 3],
             indices: vec![0, 1, 2],
             touches_boundary: true,
+            ccw_outward: None,
         }
     }
 

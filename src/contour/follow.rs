@@ -219,6 +219,15 @@ impl<'f> ContourFollower<'f> {
         f
     }
 
+    /// Hands the follower a mesh it made earlier that no one needs any
+    /// more: the next extraction that goes to the parallel sweep writes its
+    /// mesh into that one's arrays (a fresh array is fresh pages, which the
+    /// kernel faults in and zeroes; on a head's contour about 130 MB per
+    /// drag step). An extraction that does not use it lets it go.
+    pub fn recycle(&mut self, spare: ContourMesh) {
+        self.sweep.spare = Some(spare);
+    }
+
     /// Gives the tables back for the next follower.
     pub fn into_scratch(self) -> FollowerScratch {
         FollowerScratch {
@@ -327,10 +336,13 @@ impl<'f> ContourFollower<'f> {
         if let Some(limit) = flood
             && let Some(mesh) = self.follow_within(seed, iso, limit, cancel)?
         {
+            self.sweep.spare = None;
             return Ok(mesh);
         }
         self.reset();
-        match contour_by_sweep(self.field, tree, seed, iso, &mut self.sweep, cancel)? {
+        let swept = contour_by_sweep(self.field, tree, seed, iso, &mut self.sweep, cancel);
+        self.sweep.spare = None;
+        match swept? {
             Some(mesh) => Ok(mesh),
             // Beyond the sweep's u32 ids: the flood has no such limit.
             None => Ok(self

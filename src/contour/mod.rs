@@ -101,6 +101,13 @@ pub struct ContourMesh {
     /// True when the contour reaches the volume's boundary (it is then an
     /// open surface, cut by the box).
     pub touches_boundary: bool,
+    /// Whether the triangles wind counter-clockwise seen from the side of
+    /// the contour that holds the volume's first vertex (a corner of the
+    /// box): for a closed contour, seen from outside (its signed volume is
+    /// positive); for an open one, the side the renderer then takes for
+    /// outside. Known when the extraction knew it without a pass over the
+    /// triangles (the sweep knows every vertex's side); None otherwise.
+    pub ccw_outward: Option<bool>,
 }
 
 impl ContourMesh {
@@ -113,6 +120,7 @@ impl ContourMesh {
             normals: Vec::new(),
             indices: Vec::new(),
             touches_boundary: false,
+            ccw_outward: None,
         }
     }
 
@@ -170,9 +178,14 @@ impl ContourMesh {
     /// that touches the volume's boundary encloses nothing) keeps the
     /// engine's convention: normals downhill, towards lower values.
     pub fn orient_outward(&mut self) {
-        if self.touches_boundary || self.signed_volume6() >= 0.0 {
+        if self.touches_boundary
+            || self
+                .ccw_outward
+                .unwrap_or_else(|| self.signed_volume6() >= 0.0)
+        {
             return;
         }
+        self.ccw_outward = Some(true);
         for t in self.indices.chunks_exact_mut(3) {
             t.swap(1, 2);
         }

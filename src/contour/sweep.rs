@@ -872,6 +872,9 @@ pub(crate) struct SweepScratch {
     /// face of the box (longer than needed after a larger contour).
     downhill: Vec<[f32; 3]>,
     on_face: Vec<bool>,
+    /// A mesh whose arrays the next contour is written into, if any
+    /// ([`ContourFollower::recycle`](super::ContourFollower::recycle)).
+    pub(super) spare: Option<ContourMesh>,
 }
 
 /// The dense vertex-id tables of a cube layer's lower and upper planes
@@ -927,7 +930,11 @@ fn sweep_one<T: Scalar>(
         plane_ids,
         downhill,
         on_face,
+        spare,
     } = scratch;
+    let spare = spare
+        .take()
+        .unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value));
     let side = |v: u32, f: T| sides.is_upper(tree, v, || iso.above_value(f.to_f64(), v));
     sides_and_cubes(values, dims, side, above, cubes, active);
     let active: &[bool] = active;
@@ -967,7 +974,8 @@ fn sweep_one<T: Scalar>(
     else {
         return Ok(None);
     };
-    let mut indices = crate::pages::filled(layer_start[nz - 1] as usize, 0u32);
+    // Every index and position is written below.
+    let mut indices = crate::pages::reused(spare.indices, layer_start[nz - 1] as usize, 0u32);
     let layers = nz - 1;
     let slabs = layers.min(4 * rayon::current_num_threads()).max(1);
     let cut: Vec<usize> = (0..=slabs).map(|s| s * layers / slabs).collect();
@@ -995,7 +1003,7 @@ fn sweep_one<T: Scalar>(
     check()?;
 
     // Positions, gradients and face flags, plane by plane.
-    let mut positions = crate::pages::filled(n, [0f32; 3]);
+    let mut positions = crate::pages::reused(spare.positions, n, [0f32; 3]);
     // Every entry is written below: no need to clear them.
     if downhill.len() < n {
         *downhill = crate::pages::filled(n, [0f32; 3]);
@@ -1016,7 +1024,7 @@ fn sweep_one<T: Scalar>(
 
     // Area-weighted normals: a slab's inner layers touch its own vertices
     // only (in parallel), its last layer the next slab's too (after).
-    let mut normals = crate::pages::filled(n, [0f32; 3]);
+    let mut normals = crate::pages::refilled(spare.normals, n, [0f32; 3]);
     // Where a slab's last layer starts: that layer reaches the next slab's
     // first plane.
     let inner_end = |s: usize| {
@@ -1052,12 +1060,16 @@ fn sweep_one<T: Scalar>(
                 prefer_gradient(n, (*g != [0.0; 3]).then_some(*g));
             }
         });
+    let touches_boundary = on_face.par_iter().any(|&f| f);
     Ok(Some(ContourMesh {
         arc: seed.arc,
         isovalue: iso.value,
         positions,
         normals,
         indices,
-        touches_boundary: on_face.par_iter().any(|&f| f),
+        touches_boundary,
+        // The triangles wind counter-clockwise seen from below; a closed
+        // contour's outside is the side of the box's corner.
+        ccw_outward: Some(above[0] == 0),
     }))
 }

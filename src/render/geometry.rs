@@ -80,7 +80,7 @@ pub enum Corners {
 /// What one pass over the triangles finds, in parallel stretches of
 /// [`SCAN_CHUNK`] corners: the greedy 16-bit runs of [`Corners`], the
 /// first corner out of range, and six times the signed volume enclosed
-/// (divergence theorem, from `centre`). One pass instead of three over a
+/// (divergence theorem, from `centre`; 0 without one). One pass instead of three over a
 /// contour's corners: each is as long as the vertices' own pass.
 struct TriangleScan {
     runs: Vec<IndexRun>,
@@ -93,7 +93,7 @@ struct TriangleScan {
 const SCAN_CHUNK: usize = 3 << 16;
 
 impl TriangleScan {
-    fn new(positions: &[[f32; 3]], indices: &[u32], centre: Vec3A) -> TriangleScan {
+    fn new(positions: &[[f32; 3]], indices: &[u32], centre: Option<Vec3A>) -> TriangleScan {
         let n = positions.len() as u32;
         let stretch = |c: usize, tris: &[u32]| -> TriangleScan {
             let offset = (c * SCAN_CHUNK) as u32;
@@ -108,7 +108,7 @@ impl TriangleScan {
                 let thi = tri[0].max(tri[1]).max(tri[2]);
                 if thi >= n {
                     scan.out_of_range.get_or_insert(thi);
-                } else {
+                } else if let Some(centre) = centre {
                     // From the first corner: the edges are short, so their
                     // cross product keeps its precision in f32.
                     let p = |k: usize| Vec3A::from(positions[tri[k] as usize]);
@@ -357,6 +357,22 @@ impl PreparedMesh {
         indices: &[u32],
         spare: PreparedMesh,
     ) -> Result<Self, String> {
+        Self::new_wound(positions, normals, indices, None, spare)
+    }
+
+    /// [`PreparedMesh::new_reusing`] told, when its maker knows it, whether
+    /// the triangles wind counter-clockwise seen from outside (a closed
+    /// contour from the sweep: [`crate::contour::ContourMesh::ccw_outward`]):
+    /// the pass over the triangles then reads no positions (on a head's
+    /// contour, gathering three positions per triangle for the signed
+    /// volume was most of it).
+    pub fn new_wound(
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        indices: &[u32],
+        ccw_outward: Option<bool>,
+        spare: PreparedMesh,
+    ) -> Result<Self, String> {
         if !normals.is_empty() && normals.len() != positions.len() {
             return Err(format!(
                 "{} normals for {} positions",
@@ -383,7 +399,8 @@ impl PreparedMesh {
         } else {
             Vec3::ZERO
         };
-        let scan = TriangleScan::new(positions, indices, centre.into());
+        let centre = ccw_outward.is_none().then_some(centre.into());
+        let scan = TriangleScan::new(positions, indices, centre);
         if let Some(bad) = scan.out_of_range {
             return Err(format!(
                 "index {bad} is out of range for {} positions",
@@ -434,7 +451,7 @@ impl PreparedMesh {
             vertices,
             indices,
             bbox,
-            ccw_outward: scan.volume6 >= 0.0,
+            ccw_outward: ccw_outward.unwrap_or(scan.volume6 >= 0.0),
         })
     }
 

@@ -39,9 +39,14 @@
 //! freed arrays to the system at once ([`crate::pages::return_freed_arrays`]).
 //! An 854k-triangle contour's step and preparation took 77-84 ms that way
 //! and 52-61 ms with spares (median of 20 steps, `FLEXISO_BENCH_DRAG=1
-//! FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`, 2 cores). At most [`SPARES`] meshes of each kind, of contours of at
-//! most [`KEPT_TRIANGLES`] triangles, are held, the one on screen among
-//! them.
+//! FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`, 2 cores). A drag
+//! step of a contour too large to keep (the head) is written into a
+//! spare's arrays by the parallel sweep in the same way
+//! ([`ContourFollower::recycle`]): on colin27_ch2's head (5.4 M triangles)
+//! about 130 MB of fresh pages per step less. At most [`SPARES`] meshes of
+//! each kind are held, the one on screen among them: after a drag of the
+//! head, one spare mesh and GPU form (about 190 MB) stay until the
+//! contour is removed.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -268,11 +273,27 @@ impl Extractions {
                     &cancel,
                 ) {
                     Some(mesh) => (mesh, false),
-                    None => (
-                        extract_mesh(&field, &tree, superarc, h, &mut scratch, expected, &cancel),
-                        true,
-                    ),
+                    None => {
+                        // A drag step of a contour too large to keep: into
+                        // a spare's arrays, as a kept contour's step.
+                        let spare = expected
+                            .is_some_and(|e| e > KEPT_TRIANGLES)
+                            .then(|| spares.lock().ok().and_then(|mut s| s.mesh()))
+                            .flatten();
+                        let mesh = extract_mesh_into(
+                            &field,
+                            &tree,
+                            superarc,
+                            h,
+                            &mut scratch,
+                            expected,
+                            spare,
+                            &cancel,
+                        );
+                        (mesh, true)
+                    }
                 };
+                let recycled = !afresh || expected.is_some_and(|e| e > KEPT_TRIANGLES);
                 if let Ok(mut p) = pool.lock() {
                     p.push(scratch);
                 }
@@ -285,7 +306,7 @@ impl Extractions {
                 let mesh = mesh.map(Arc::new);
                 let ms = t.elapsed().as_secs_f64() * 1e3;
                 let gpu = match &mesh {
-                    Some(m) if !afresh => {
+                    Some(m) if recycled => {
                         let spare = spares.lock().ok().and_then(|mut s| s.gpu());
                         let gpu = prepare_reusing(m, spare.unwrap_or_default());
                         if let Ok(mut s) = spares.lock() {
@@ -554,12 +575,31 @@ pub fn extract_mesh(
     expected: Option<usize>,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
+    extract_mesh_into(field, tree, superarc, h, scratch, expected, None, cancel)
+}
+
+/// [`extract_mesh`] written into `spare`'s arrays when it goes to the
+/// parallel sweep ([`ContourFollower::recycle`]).
+#[allow(clippy::too_many_arguments)]
+fn extract_mesh_into(
+    field: &ScalarField,
+    tree: &ContourTree,
+    superarc: ArcId,
+    h: f64,
+    scratch: &mut FollowerScratch,
+    expected: Option<usize>,
+    spare: Option<ContourMesh>,
+    cancel: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<ContourMesh>, Cancelled> {
     let iso = Isovalue::new(h);
     let Some(seed) = path_seed(tree, field, superarc, iso) else {
         return Ok(None);
     };
     // On every core for a large contour (see ContourFollower::extract).
     let mut follower = ContourFollower::with_scratch(field, std::mem::take(scratch));
+    if let Some(spare) = spare {
+        follower.recycle(spare);
+    }
     let mesh = follower.extract_expecting(tree, &seed, iso, expected, cancel);
     *scratch = follower.into_scratch();
     mesh.map(Some)

@@ -655,6 +655,7 @@ mod tests {
             normals,
             indices,
             touches_boundary: false,
+            ccw_outward: None,
         };
         let mut p = SlicePanel::new(None);
         p.set_field(&field);
