@@ -872,6 +872,8 @@ pub(crate) struct SweepScratch {
     /// face of the box (longer than needed after a larger contour).
     downhill: Vec<[f32; 3]>,
     on_face: Vec<bool>,
+    /// Per run of planes, its gradient table.
+    ends: Vec<EndGradients>,
     /// A mesh whose arrays the next contour is written into, if any
     /// ([`ContourFollower::recycle`](super::ContourFollower::recycle)).
     pub(super) spare: Option<ContourMesh>,
@@ -930,6 +932,7 @@ fn sweep_one<T: Scalar>(
         plane_ids,
         downhill,
         on_face,
+        ends,
         spare,
     } = scratch;
     let spare = spare
@@ -1010,15 +1013,32 @@ fn sweep_one<T: Scalar>(
         *on_face = crate::pages::filled(n, false);
     }
     let (downhill, on_face) = (&mut downhill[..n], &mut on_face[..n]);
-    let lengths = || plane_lengths.iter().copied();
-    split_lengths(&mut positions, lengths())
+    // Runs of consecutive planes, each with its own kept gradient table (a
+    // plane's upper ends are the next plane's lower ones; a table made per
+    // task was 2 MB of fresh pages each time on colin27).
+    let runs = (4 * rayon::current_num_threads()).min(nz).max(1);
+    let run_start: Vec<usize> = (0..=runs).map(|r| r * nz / runs).collect();
+    let run_lengths =
+        || (0..runs).map(|r| vertex_start(run_start[r + 1]) - vertex_start(run_start[r]));
+    ends.resize_with(runs, EndGradients::default);
+    split_lengths(&mut positions, run_lengths())
         .into_par_iter()
-        .zip(split_lengths(&mut *downhill, lengths()))
-        .zip(split_lengths(&mut *on_face, lengths()))
+        .zip(split_lengths(&mut *downhill, run_lengths()))
+        .zip(split_lengths(&mut *on_face, run_lengths()))
+        .zip(ends.par_iter_mut())
         .enumerate()
-        .for_each_init(EndGradients::default, |ends, (z, ((p, g), f))| {
-            let rows = &active[ny * z..][..ny];
-            crossed_edges(values, field, cubes, rows, iso, z, |_| true, p, g, f, ends);
+        .for_each(|(r, (((p, g), f), ends))| {
+            let planes = run_start[r]..run_start[r + 1];
+            let lengths = || plane_lengths[planes.clone()].iter().copied();
+            let (p, g, f) = (
+                split_lengths(p, lengths()),
+                split_lengths(g, lengths()),
+                split_lengths(f, lengths()),
+            );
+            for (z, ((p, g), f)) in planes.clone().zip(p.into_iter().zip(g).zip(f)) {
+                let rows = &active[ny * z..][..ny];
+                crossed_edges(values, field, cubes, rows, iso, z, |_| true, p, g, f, ends);
+            }
         });
     check()?;
 
