@@ -68,9 +68,8 @@ pub const SERIAL_TRIANGLES: usize = 60_000;
 /// `voxels` on `threads` cores: where following and sweeping for a contour
 /// of that size cost the same ([`SweepCost`]), so a contour of any size
 /// costs at most twice the cheaper way (what it would cost were its size
-/// known), a fifth of that when it is small. About 215k triangles for
-/// colin27 (7.1 M voxels) on 2 cores, 19k (raised to [`SERIAL_TRIANGLES`])
-/// on 16.
+/// known). About 410k triangles for colin27 (7.1 M voxels) on 2 cores, 43k
+/// (raised to [`SERIAL_TRIANGLES`]) on 16.
 pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
         return usize::MAX;
@@ -85,11 +84,13 @@ pub fn serial_limit(voxels: usize, threads: usize) -> usize {
 }
 
 /// What following a contour and sweeping for it cost, in nanoseconds of
-/// wall time. Measured on colin27_ch2 and colin27_ch2better (release, 2
-/// threads, CPU time of all threads): following costs 96-171 ns per
-/// triangle on one thread; the sweep, which marches the contour alone
-/// (its vertices' sides from the tree), about 7 ns per voxel plus 65 ns
-/// per triangle of the contour, spread over the cores.
+/// wall time. Measured on colin27_ch2 (2026-12-05, release, 2 threads,
+/// `FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`): following costs
+/// 95-130 ns per triangle on one thread; the sweep, which marches the
+/// contour alone (its vertices' sides from the tree), about 11 ns per
+/// voxel plus 41 ns per triangle of the contour of CPU, spread over the
+/// cores (the head's 5.4 M triangles in 149-169 ms, an 854k-triangle
+/// contour in 53-61 ms).
 #[derive(Clone, Copy, Debug)]
 pub struct SweepCost {
     /// Voxels of the volume.
@@ -100,8 +101,8 @@ pub struct SweepCost {
 
 impl SweepCost {
     const FOLLOW_NS: f64 = 115.0;
-    const VOXEL_NS: f64 = 7.0;
-    const CONTOUR_NS: f64 = 65.0;
+    const VOXEL_NS: f64 = 11.0;
+    const CONTOUR_NS: f64 = 41.0;
 
     /// Following a contour of `triangles`.
     pub fn follow(&self, triangles: usize) -> f64 {
