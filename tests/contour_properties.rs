@@ -423,25 +423,6 @@ proptest! {
 /// oriented triangles on as many shared vertices, the same boundary flag,
 /// the same topology, and at each position the same unit normal (up to
 /// the order the area-weighted sums were added in).
-/// Six times the signed volume a mesh encloses (divergence theorem, about
-/// its first vertex).
-fn signed_volume6(m: &ContourMesh) -> f64 {
-    let o = m.positions[0].map(f64::from);
-    let p = |i: u32| {
-        let q = m.positions[i as usize];
-        [0, 1, 2].map(|k| f64::from(q[k]) - o[k])
-    };
-    m.indices
-        .chunks_exact(3)
-        .map(|t| {
-            let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
-            a[0] * (b[1] * c[2] - b[2] * c[1])
-                + a[1] * (b[2] * c[0] - b[0] * c[2])
-                + a[2] * (b[0] * c[1] - b[1] * c[0])
-        })
-        .sum()
-}
-
 fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
     assert_eq!(fast.arc, oracle.arc, "{at}: arc");
     assert_eq!(
@@ -457,7 +438,7 @@ fn assert_same_contour(fast: &ContourMesh, oracle: &ContourMesh, at: &str) {
     // A winding the extraction knew is the one a closed contour's
     // triangles have.
     if let Some(ccw) = fast.ccw_outward.filter(|_| !fast.touches_boundary) {
-        let v = signed_volume6(oracle);
+        let v = oracle.signed_volume6();
         assert!(v != 0.0, "{at}: a closed contour encloses something");
         assert_eq!(ccw, v > 0.0, "{at}: winding seen from outside");
     }

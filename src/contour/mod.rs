@@ -151,7 +151,7 @@ impl ContourMesh {
     /// theorem, about the first vertex for precision); positive
     /// when a closed mesh's triangles wind counter-clockwise seen from
     /// outside.
-    fn signed_volume6(&self) -> f64 {
+    pub fn signed_volume6(&self) -> f64 {
         let Some(&o) = self.positions.first() else {
             return 0.0;
         };
