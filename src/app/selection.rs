@@ -446,6 +446,7 @@ pub fn extract(field: &ScalarField, tree: &ContourTree, c: &mut Contour) {
         c.h,
         &mut FollowerScratch::default(),
         None,
+        None,
         &|| false,
     )
     .unwrap_or(None);

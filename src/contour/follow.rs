@@ -66,7 +66,7 @@ pub const SERIAL_TRIANGLES: usize = 60_000;
 /// How many triangles the serial flood emits, for a contour of unknown
 /// size, before it hands over to the parallel sweep, for a volume of
 /// `voxels` on `threads` cores: where following and sweeping for a contour
-/// of that size cost the same ([`SweepCost`]), so a contour of any size
+/// of that size cost the same ([`FOLLOW_NS`]), so a contour of any size
 /// costs at most twice the cheaper way (what it would cost were its size
 /// known). About 410k triangles for colin27 (7.1 M voxels) on 2 cores, 43k
 /// (raised to [`SERIAL_TRIANGLES`]) on 16.
@@ -74,47 +74,24 @@ pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
         return usize::MAX;
     }
-    let (f, v, t) = (
-        SweepCost::FOLLOW_NS,
-        SweepCost::VOXEL_NS,
-        SweepCost::CONTOUR_NS,
-    );
-    let even = v * voxels as f64 / (f * threads as f64 - t);
+    // Following t triangles, F t, against sweeping for them, (V v + S t) / P.
+    let even = SWEEP_VOXEL_NS * voxels as f64 / (FOLLOW_NS * threads as f64 - SWEEP_TRIANGLE_NS);
     (even as usize).max(SERIAL_TRIANGLES)
 }
 
 /// What following a contour and sweeping for it cost, in nanoseconds of
-/// wall time. Measured on colin27_ch2 (2026-12-05, release, 2 threads,
+/// CPU. Measured on colin27_ch2 (2026-12-05, release, 2 threads,
 /// `FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`): following costs
 /// 95-130 ns per triangle on one thread; the sweep, which marches the
 /// contour alone (its vertices' sides from the tree), about 11 ns per
-/// voxel plus 41 ns per triangle of the contour of CPU, spread over the
-/// cores (the head's 5.4 M triangles in 149-169 ms, an 854k-triangle
-/// contour in 53-61 ms).
-#[derive(Clone, Copy, Debug)]
-pub struct SweepCost {
-    /// Voxels of the volume.
-    pub voxels: usize,
-    /// Worker threads.
-    pub threads: usize,
-}
-
-impl SweepCost {
-    const FOLLOW_NS: f64 = 115.0;
-    const VOXEL_NS: f64 = 11.0;
-    const CONTOUR_NS: f64 = 41.0;
-
-    /// Following a contour of `triangles`.
-    pub fn follow(&self, triangles: usize) -> f64 {
-        Self::FOLLOW_NS * triangles as f64
-    }
-
-    /// Sweeping for a contour of `triangles`.
-    pub fn sweep(&self, triangles: usize) -> f64 {
-        (Self::VOXEL_NS * self.voxels as f64 + Self::CONTOUR_NS * triangles as f64)
-            / self.threads.max(1) as f64
-    }
-}
+/// voxel plus 41 ns per triangle of the contour, spread over the cores
+/// (the head's 5.4 M triangles in 149-169 ms of wall time, an
+/// 854k-triangle contour in 53-61 ms).
+const FOLLOW_NS: f64 = 115.0;
+/// See [`FOLLOW_NS`].
+const SWEEP_VOXEL_NS: f64 = 11.0;
+/// See [`FOLLOW_NS`].
+const SWEEP_TRIANGLE_NS: f64 = 41.0;
 
 /// Tetrahedra the flood visits between two cancel checks.
 const CHECK_EVERY: u32 = 1 << 14;
@@ -163,6 +140,9 @@ pub struct ContourFollower<'f> {
     vertex_edges: Vec<(u32, u32, f32)>,
     /// The parallel sweep's tables (see [`ContourFollower::extract`]).
     sweep: SweepScratch,
+    /// A mesh for the next sweep to write into
+    /// ([`ContourFollower::recycle`]).
+    spare: Option<ContourMesh>,
     /// Triangles the serial flood of [`ContourFollower::extract`] may
     /// emit; None: [`serial_limit`] of the field and the thread pool.
     serial_limit: Option<usize>,
@@ -226,7 +206,7 @@ impl<'f> ContourFollower<'f> {
     /// kernel faults in and zeroes; on a head's contour about 130 MB per
     /// drag step). An extraction that does not use it lets it go.
     pub fn recycle(&mut self, spare: ContourMesh) {
-        self.sweep.spare = Some(spare);
+        self.spare = Some(spare);
     }
 
     /// Gives the tables back for the next follower.
@@ -257,6 +237,7 @@ impl<'f> ContourFollower<'f> {
             stack: Vec::new(),
             vertex_edges: Vec::new(),
             sweep: SweepScratch::default(),
+            spare: None,
             serial_limit: None,
         }
     }
@@ -310,7 +291,7 @@ impl<'f> ContourFollower<'f> {
 
     /// [`ContourFollower::extract`] told how many triangles the contour
     /// had a moment ago (the last drag step): one large enough that the
-    /// sweep is the cheaper way ([`SweepCost`]) goes straight to the
+    /// sweep is the cheaper way (past [`serial_limit`]) goes straight to the
     /// sweep. Only the path taken depends on `expected`, never the mesh.
     pub fn extract_expecting(
         &mut self,
@@ -334,16 +315,15 @@ impl<'f> ContourFollower<'f> {
             Some(e) if e > limit => None,
             _ => Some(limit),
         };
+        let spare = self.spare.take();
         if let Some(limit) = flood
             && let Some(mesh) = self.follow_within(seed, iso, limit, cancel)?
         {
-            self.sweep.spare = None;
             return Ok(mesh);
         }
         self.reset();
-        let swept = contour_by_sweep(self.field, tree, seed, iso, &mut self.sweep, cancel);
-        self.sweep.spare = None;
-        match swept? {
+        let spare = spare.unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value));
+        match contour_by_sweep(self.field, tree, seed, iso, &mut self.sweep, spare, cancel)? {
             Some(mesh) => Ok(mesh),
             // Beyond the sweep's u32 ids: the flood has no such limit.
             None => Ok(self

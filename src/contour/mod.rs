@@ -59,7 +59,7 @@ pub mod topology;
 #[doc(no_inline)]
 pub use crate::field::Isovalue;
 pub use drag::DraggedContour;
-pub use follow::{ContourFollower, FollowerScratch, SweepCost};
+pub use follow::{ContourFollower, FollowerScratch};
 pub use global::{all_contours, contours_through, follow_all};
 pub use seed::{PathSeed, PathSeeds, arc_spans, path_seed, path_seed_in_chain};
 pub use topology::MeshTopology;

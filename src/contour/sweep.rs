@@ -244,7 +244,7 @@ fn sweep<T: Scalar>(
         .for_each_init(EndGradients::default, |ends, (z, (((p, g), f), n))| {
             n.fill([0.0; 3]);
             let rows = &active[ny * z..][..ny];
-            crossed_edges(values, field, &cubes, rows, iso, z, |_| true, p, g, f, ends)
+            crossed_edges(values, field, &cubes, rows, iso, z, p, g, f, ends)
         });
 
     // 2. Triangles, counted per cube layer, then written slab by slab.
@@ -608,7 +608,6 @@ fn crossed_edges<T: Scalar>(
     active: &[bool],
     iso: Isovalue,
     z: usize,
-    mut keep: impl FnMut(usize) -> bool,
     positions: &mut [[f32; 3]],
     downhill_out: &mut [[f32; 3]],
     on_face: &mut [bool],
@@ -620,7 +619,6 @@ fn crossed_edges<T: Scalar>(
     let inverse = spacing.map(f64::recip);
     ends.fit(dims);
     let mut i = 0;
-    let mut edge = 0;
     // `active` holds the plane's `ny` rows.
     for (y, &on) in active.iter().enumerate() {
         if !on {
@@ -633,10 +631,6 @@ fn crossed_edges<T: Scalar>(
             while todo != 0 {
                 let d = todo.trailing_zeros() as usize;
                 todo &= todo - 1;
-                edge += 1;
-                if !keep(edge - 1) {
-                    continue;
-                }
                 let step = [d & 1, d >> 1 & 1, d >> 2 & 1];
                 let (cv, cu) = ([x, y, z], [x + step[0], y + step[1], z + step[2]]);
                 let u = v + step[0] + nx * step[1] + nx * ny * step[2];
@@ -874,9 +868,6 @@ pub(crate) struct SweepScratch {
     on_face: Vec<bool>,
     /// Per run of planes, its gradient table.
     ends: Vec<EndGradients>,
-    /// A mesh whose arrays the next contour is written into, if any
-    /// ([`ContourFollower::recycle`](super::ContourFollower::recycle)).
-    pub(super) spare: Option<ContourMesh>,
 }
 
 /// The dense vertex-id tables of a cube layer's lower and upper planes
@@ -894,13 +885,16 @@ type PlaneIds = [Vec<u32>; 2];
 /// order. `Ok(None)` when the seed's edge is not crossed or the contour
 /// does not fit the sweep's `u32` ids (the caller then follows the seed);
 /// `Err` as soon as `cancel` answers true (checked between phases and
-/// before every cube layer of every slab).
+/// before every cube layer of every slab). The mesh is written into
+/// `spare`'s arrays where they are large enough.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn contour_by_sweep(
     field: &ScalarField,
     tree: &ContourTree,
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
+    spare: ContourMesh,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let dims = field.dims();
@@ -908,7 +902,7 @@ pub(crate) fn contour_by_sweep(
         return Ok(None);
     }
     let sides = CutSides::new(tree, seed.arc);
-    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, tree, &sides, seed, iso, scratch, cancel))
+    crate::with_values!(field.values(), v => sweep_one(v.as_slice(), field, tree, &sides, seed, iso, scratch, spare, cancel))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -920,6 +914,7 @@ fn sweep_one<T: Scalar>(
     seed: &PathSeed,
     iso: Isovalue,
     scratch: &mut SweepScratch,
+    spare: ContourMesh,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Result<Option<ContourMesh>, Cancelled> {
     let check = || if cancel() { Err(Cancelled) } else { Ok(()) };
@@ -933,11 +928,7 @@ fn sweep_one<T: Scalar>(
         downhill,
         on_face,
         ends,
-        spare,
     } = scratch;
-    let spare = spare
-        .take()
-        .unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value));
     let side = |v: u32, f: T| sides.is_upper(tree, v, || iso.above_value(f.to_f64(), v));
     sides_and_cubes(values, dims, side, above, cubes, active);
     let active: &[bool] = active;
@@ -1037,7 +1028,7 @@ fn sweep_one<T: Scalar>(
             );
             for (z, ((p, g), f)) in planes.clone().zip(p.into_iter().zip(g).zip(f)) {
                 let rows = &active[ny * z..][..ny];
-                crossed_edges(values, field, cubes, rows, iso, z, |_| true, p, g, f, ends);
+                crossed_edges(values, field, cubes, rows, iso, z, p, g, f, ends);
             }
         });
     check()?;

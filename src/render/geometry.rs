@@ -363,9 +363,8 @@ impl PreparedMesh {
     /// [`PreparedMesh::new_reusing`] told, when its maker knows it, whether
     /// the triangles wind counter-clockwise seen from outside (a closed
     /// contour from the sweep: [`crate::contour::ContourMesh::ccw_outward`]):
-    /// the pass over the triangles then reads no positions (on a head's
-    /// contour, gathering three positions per triangle for the signed
-    /// volume was most of it).
+    /// the pass over the triangles then reads no positions (the signed
+    /// volume's gathers: 4-5 ms of a 5.4 M-triangle head's 45-50 ms).
     pub fn new_wound(
         positions: &[[f32; 3]],
         normals: &[[f32; 3]],

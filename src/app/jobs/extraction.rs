@@ -261,7 +261,7 @@ impl Extractions {
                 let mut expected = sizes.lock().ok().and_then(|m| m.get(&id).copied());
                 // Superseded: a newer request for this contour is queued.
                 let cancel = || newest.load(Ordering::Relaxed) != request;
-                let (mesh, afresh) = match drag_step(
+                let (mesh, afresh, recycled) = match drag_step(
                     &kept,
                     &spares,
                     id,
@@ -272,15 +272,15 @@ impl Extractions {
                     &mut expected,
                     &cancel,
                 ) {
-                    Some(mesh) => (mesh, false),
+                    Some(mesh) => (mesh, false, true),
                     None => {
                         // A drag step of a contour too large to keep: into
                         // a spare's arrays, as a kept contour's step.
-                        let spare = expected
-                            .is_some_and(|e| e > KEPT_TRIANGLES)
+                        let large = expected.is_some_and(|e| e > KEPT_TRIANGLES);
+                        let spare = large
                             .then(|| spares.lock().ok().and_then(|mut s| s.mesh()))
                             .flatten();
-                        let mesh = extract_mesh_into(
+                        let mesh = extract_mesh(
                             &field,
                             &tree,
                             superarc,
@@ -290,10 +290,9 @@ impl Extractions {
                             spare,
                             &cancel,
                         );
-                        (mesh, true)
+                        (mesh, true, large)
                     }
                 };
-                let recycled = !afresh || expected.is_some_and(|e| e > KEPT_TRIANGLES);
                 if let Ok(mut p) = pool.lock() {
                     p.push(scratch);
                 }
@@ -565,23 +564,10 @@ fn drag_step(
 }
 
 /// The contour of `superarc` at `h` (None when the superarc does not span
-/// h).
-pub fn extract_mesh(
-    field: &ScalarField,
-    tree: &ContourTree,
-    superarc: ArcId,
-    h: f64,
-    scratch: &mut FollowerScratch,
-    expected: Option<usize>,
-    cancel: &(dyn Fn() -> bool + Sync),
-) -> Result<Option<ContourMesh>, Cancelled> {
-    extract_mesh_into(field, tree, superarc, h, scratch, expected, None, cancel)
-}
-
-/// [`extract_mesh`] written into `spare`'s arrays when it goes to the
-/// parallel sweep ([`ContourFollower::recycle`]).
+/// h), written into `spare`'s arrays when it goes to the parallel sweep
+/// ([`ContourFollower::recycle`]).
 #[allow(clippy::too_many_arguments)]
-fn extract_mesh_into(
+pub fn extract_mesh(
     field: &ScalarField,
     tree: &ContourTree,
     superarc: ArcId,
@@ -656,6 +642,7 @@ mod tests {
                 arc,
                 h,
                 &mut FollowerScratch::default(),
+                None,
                 None,
                 &|| false,
             )

@@ -155,7 +155,7 @@ impl AllContours {
                     .into_par_iter()
                     // One follower's tables per worker thread, reused.
                     .map_init(FollowerScratch::default, |scratch, s| {
-                        extract_mesh(&field, &tree, s, h, scratch, None, &|| false)
+                        extract_mesh(&field, &tree, s, h, scratch, None, None, &|| false)
                             .ok()
                             .flatten()
                     })

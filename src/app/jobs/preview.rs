@@ -103,7 +103,16 @@ impl Preview {
                 .ok()
                 .and_then(|mut s| s.take())
                 .unwrap_or_default();
-            let mesh = extract_mesh(&field, &tree, superarc, h, &mut scratch, None, &cancel);
+            let mesh = extract_mesh(
+                &field,
+                &tree,
+                superarc,
+                h,
+                &mut scratch,
+                None,
+                None,
+                &cancel,
+            );
             if let Ok(mut s) = pool.lock() {
                 *s = Some(scratch);
             }
