@@ -78,8 +78,8 @@
 
 use super::follow::tet_of_edge;
 use super::marching::{
-    Cancelled, TetTables, add_area_normals, corner, edge_fraction, end_gradient,
-    interpolated_downhill, normalize, prefer_gradient,
+    Cancelled, TetTables, add_area_normals, choose_normals, corner, downhill_vector, edge_fraction,
+    end_gradient,
 };
 use super::sweep::split_lengths;
 use super::{ContourMesh, PathSeed, path_seed};
@@ -210,7 +210,7 @@ pub struct DraggedContour {
     /// its vertices' downhill gradients, kept between steps (a fresh page
     /// costs as much as the work done on it).
     renumber: Vec<u32>,
-    gradients: Vec<Option<[f32; 3]>>,
+    gradients: Vec<[f32; 3]>,
     /// A mesh this contour made earlier and its caller let go
     /// ([`DraggedContour::recycle`]): the next mesh is written into its
     /// arrays, and the tetrahedra of a step are queued in `queued`.
@@ -806,7 +806,7 @@ impl DraggedContour {
         let mut renumber = std::mem::take(&mut self.renumber);
         renumber.resize(n, NONE);
         let mut gradients = std::mem::take(&mut self.gradients);
-        gradients.resize(kept, None);
+        gradients.resize(kept, [0.0; 3]);
         let spare = std::mem::replace(
             &mut self.spare,
             ContourMesh::empty(self.arc, self.iso.value),
@@ -840,12 +840,8 @@ impl DraggedContour {
                             let (pb, pa) = (cb[k] as f64, ca[k] as f64);
                             ((pb + s * (pa - pb)) * spacing[k]) as f32
                         });
-                        grad[w] = interpolated_downhill(
-                            e.gb.map(f64::from),
-                            e.ga.map(f64::from),
-                            s,
-                            inverse,
-                        );
+                        grad[w] =
+                            downhill_vector(e.gb.map(f64::from), e.ga.map(f64::from), s, inverse);
                         w += 1;
                     }
                 });
@@ -908,10 +904,7 @@ impl DraggedContour {
                         n[2] += o[2];
                     }
                 }
-                normalize(n);
-                for (n, g) in n.iter_mut().zip(g) {
-                    prefer_gradient(n, *g);
-                }
+                choose_normals(n, g);
             });
         self.sums = sums;
         self.renumber = renumber;

@@ -207,7 +207,7 @@ pub struct Cancelled;
 /// extraction lands) or disagrees with the triangles' winding (the
 /// central-difference gradient is not the gradient of the piecewise-linear
 /// interpolant the triangles come from), the area-weighted triangle normal
-/// stands in, so shading never flips a vertex inside out.
+/// stands in, so shading never flips a vertex inside out ([`choose_normal`]).
 pub fn gradient_normals<T: Scalar>(
     values: &[T],
     dims: [usize; 3],
@@ -216,21 +216,8 @@ pub fn gradient_normals<T: Scalar>(
     positions: &[[f32; 3]],
     indices: &[u32],
 ) -> Vec<[f32; 3]> {
-    let mut normals = vertex_normals(positions, indices);
-    apply_gradient_normals(values, dims, spacing, vertex_edges, &mut normals);
-    normals
-}
-
-/// The gradient half of [`gradient_normals`]: replaces each unit normal in
-/// `normals` (area-weighted, of the vertex on `vertex_edges[i]`) by the
-/// downhill gradient where that agrees with it.
-fn apply_gradient_normals<T: Scalar>(
-    values: &[T],
-    dims: [usize; 3],
-    spacing: [f64; 3],
-    vertex_edges: &[(u32, u32, f32)],
-    normals: &mut [[f32; 3]],
-) {
+    let mut normals = vec![[0f32; 3]; positions.len()];
+    add_area_normals(&mut normals, positions, indices);
     let coords = |v: u32| {
         let v = v as usize;
         (
@@ -240,14 +227,15 @@ fn apply_gradient_normals<T: Scalar>(
     };
     for (n, &(b, a, s)) in normals.iter_mut().zip(vertex_edges) {
         let g = downhill(values, dims, spacing, coords(b), coords(a), s as f64);
-        prefer_gradient(n, g);
+        *n = choose_normal(*n, g);
     }
+    normals
 }
 
-/// The unit downhill direction at the contour vertex a fraction `s` from
+/// The [`downhill_vector`] at the contour vertex a fraction `s` from
 /// `below` to `above` (each a vertex id with its coordinates): the field's
 /// gradients at the two ends (central differences, one-sided on the box's
-/// faces), interpolated and negated. `None` where it vanishes.
+/// faces), interpolated and negated.
 #[inline]
 pub(crate) fn downhill<T: Scalar>(
     values: &[T],
@@ -256,19 +244,19 @@ pub(crate) fn downhill<T: Scalar>(
     below: (usize, [usize; 3]),
     above: (usize, [usize; 3]),
     s: f64,
-) -> Option<[f32; 3]> {
+) -> [f32; 3] {
     let (gb, ga) = (
         end_gradient(values, dims, below),
         end_gradient(values, dims, above),
     );
     // Loop-invariant where this is inlined into a loop over vertices.
     let inverse = spacing.map(f64::recip);
-    interpolated_downhill(gb, ga, s, inverse)
+    downhill_vector(gb, ga, s, inverse)
 }
 
 /// The field's gradient at vertex `v` (id and coordinates) per index step:
 /// central differences, one-sided on the box's faces (the spacing is
-/// applied after the interpolation, by [`interpolated_downhill`]).
+/// applied after the interpolation, by [`downhill_vector`]).
 #[inline]
 pub(crate) fn end_gradient<T: Scalar>(
     values: &[T],
@@ -289,35 +277,116 @@ pub(crate) fn end_gradient<T: Scalar>(
     })
 }
 
-/// The unit downhill direction a fraction `s` of the way between two
-/// [`end_gradient`]s, given the reciprocal spacing; None where it
-/// vanishes.
+/// The downhill gradient a fraction `s` of the way between two
+/// [`end_gradient`]s, given the reciprocal spacing, *not* normalised (the
+/// length is taken once per vertex by [`choose_normals`], in bulk, where
+/// it costs a tenth of a square root and a division per crossed edge in
+/// double precision); zero where it is not finite in `f32` (an underflow
+/// reads as a vanished gradient: the triangles' normal then stands in).
 #[inline]
-pub(crate) fn interpolated_downhill(
-    gb: [f64; 3],
-    ga: [f64; 3],
-    s: f64,
-    inverse: [f64; 3],
-) -> Option<[f32; 3]> {
-    // Divisions cost more than the rest of a vertex's arithmetic: the
-    // length by one reciprocal.
-    let g: [f64; 3] = std::array::from_fn(|k| -(gb[k] + s * (ga[k] - gb[k])) * inverse[k]);
-    let l2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-    (l2 > 0.0 && l2.is_finite()).then(|| {
-        let r = l2.sqrt().recip();
-        g.map(|x| (x * r) as f32)
-    })
+pub(crate) fn downhill_vector(gb: [f64; 3], ga: [f64; 3], s: f64, inverse: [f64; 3]) -> [f32; 3] {
+    let g: [f32; 3] = std::array::from_fn(|k| (-(gb[k] + s * (ga[k] - gb[k])) * inverse[k]) as f32);
+    if g.iter().all(|x| x.is_finite()) {
+        g
+    } else {
+        [0.0; 3]
+    }
 }
 
-/// Takes the downhill gradient `g` for the unit normal `n` (area-weighted,
-/// from the triangles) where it agrees with the triangles' winding.
+/// The unit vertex normal from its area-weighted sum `n` (as
+/// [`add_area_normals`] leaves it) and its [`downhill_vector`] `g`: the
+/// unit gradient where it agrees with the triangles' winding (a positive
+/// dot product with the sum), else the unit sum (+z where the sum
+/// vanishes). So shading follows the field's smooth gradient but never
+/// flips a vertex inside out where the central differences disagree with
+/// the piecewise-linear interpolant the triangles come from.
 #[inline]
-pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
-    if let Some(g) = g
-        && g[0] * n[0] + g[1] * n[1] + g[2] * n[2] > 0.0
-    {
-        *n = g;
+pub(crate) fn choose_normal(n: [f32; 3], g: [f32; 3]) -> [f32; 3] {
+    let (ln, lg) = (dot(n, n), dot(g, g));
+    if plain_length(ln) && (lg == 0.0 || plain_length(lg)) {
+        // Every vertex but those of degenerate triangles or of extreme
+        // gradients: the same arithmetic as a lane of `choose_normals`.
+        let (v, l) = if lg != 0.0 && dot(n, g) > 0.0 {
+            (g, lg)
+        } else {
+            (n, ln)
+        };
+        let r = l.sqrt().recip();
+        return v.map(|x| x * r);
     }
+    let a = unit(n).unwrap_or([0.0, 0.0, 1.0]);
+    match unit(g) {
+        Some(u) if dot(u, a) > 0.0 => u,
+        _ => a,
+    }
+}
+
+/// [`choose_normal`] for every vertex, in place of its area-weighted sum:
+/// eight vertices at a time without a branch (so the square roots and
+/// divisions vectorise), the rare block holding a degenerate one by the
+/// vertex.
+pub(crate) fn choose_normals(normals: &mut [[f32; 3]], downhill: &[[f32; 3]]) {
+    const LANES: usize = 8;
+    let mut blocks = normals.chunks_exact_mut(LANES);
+    let mut gradients = downhill.chunks_exact(LANES);
+    for (n, g) in (&mut blocks).zip(&mut gradients) {
+        let mut out = [[0f32; 3]; LANES];
+        let mut plain = true;
+        for k in 0..LANES {
+            let (ln, lg) = (dot(n[k], n[k]), dot(g[k], g[k]));
+            plain &= plain_length(ln) & ((lg == 0.0) | plain_length(lg));
+            let take = (lg != 0.0) & (dot(n[k], g[k]) > 0.0);
+            let (v, l) = if take { (g[k], lg) } else { (n[k], ln) };
+            let r = l.sqrt().recip();
+            out[k] = v.map(|x| x * r);
+        }
+        if plain {
+            n.copy_from_slice(&out);
+        } else {
+            for (n, g) in n.iter_mut().zip(g) {
+                *n = choose_normal(*n, *g);
+            }
+        }
+    }
+    for (n, g) in blocks
+        .into_remainder()
+        .iter_mut()
+        .zip(gradients.remainder())
+    {
+        *n = choose_normal(*n, *g);
+    }
+}
+
+#[inline(always)]
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// A squared length whose square root and reciprocal are taken without
+/// overflow or precision lost to underflow.
+#[inline(always)]
+fn plain_length(l2: f32) -> bool {
+    (1e-30..1e30).contains(&l2)
+}
+
+/// `v` scaled to unit length; None when it is zero or not finite. The
+/// squared length is taken in `f32` where that neither overflows nor
+/// loses precision to underflow, else after scaling by the largest
+/// component.
+#[inline]
+fn unit(v: [f32; 3]) -> Option<[f32; 3]> {
+    let l2 = dot(v, v);
+    if plain_length(l2) {
+        let r = l2.sqrt().recip();
+        return Some(v.map(|x| x * r));
+    }
+    let m = v[0].abs().max(v[1].abs()).max(v[2].abs());
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    let w = v.map(|x| x / m);
+    let r = dot(w, w).sqrt().recip();
+    Some(w.map(|x| x * r))
 }
 
 /// Unit vertex normals as area-weighted sums of the triangle normals (a
@@ -328,7 +397,9 @@ pub(crate) fn prefer_gradient(n: &mut [f32; 3], g: Option<[f32; 3]>) {
 pub fn vertex_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut acc = vec![[0f32; 3]; positions.len()];
     add_area_normals(&mut acc, positions, indices);
-    normalize(&mut acc);
+    for n in &mut acc {
+        *n = unit(*n).unwrap_or([0.0, 0.0, 1.0]);
+    }
     acc
 }
 
@@ -367,14 +438,68 @@ pub(crate) fn area_normal(positions: &[[f32; 3]], tri: &[u32]) -> [f32; 3] {
     ]
 }
 
-/// Scales each normal to unit length (a zero or non-finite one becomes +z).
-pub(crate) fn normalize(normals: &mut [[f32; 3]]) {
-    for n in normals {
-        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        *n = if l > 0.0 && l.is_finite() {
-            [n[0] / l, n[1] / l, n[2] / l]
-        } else {
-            [0.0, 0.0, 1.0]
-        };
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A component from every range a normal or gradient can take: zero,
+    /// tiny, plain, huge, either sign.
+    fn component() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            Just(0.0f32),
+            -1e3f32..1e3,
+            (-1.0f32..1.0).prop_map(|x| x * 1e-20),
+            (-1.0f32..1.0).prop_map(|x| x * 1e25),
+        ]
+    }
+
+    fn vector() -> impl Strategy<Value = [f32; 3]> {
+        [component(), component(), component()]
+    }
+
+    /// Mostly plain pairs, so that most blocks of eight take the
+    /// vectorised path, and some from every range.
+    fn pair() -> impl Strategy<Value = ([f32; 3], [f32; 3])> {
+        let plain = || [-1e3f32..1e3, -1e3f32..1e3, -1e3f32..1e3];
+        prop_oneof![40 => (plain(), plain()), 1 => (vector(), vector())]
+    }
+
+    proptest! {
+        /// The blocked pass gives every vertex exactly the scalar rule's
+        /// bits, and the rule is the one its doc states, checked in double
+        /// precision: a unit vector, the gradient's direction where its
+        /// dot product with the sum is clearly positive, the sum's where
+        /// clearly not.
+        #[test]
+        fn normals_chosen_in_blocks_are_the_rule(
+            pairs in proptest::collection::vec(pair(), 0..40)
+        ) {
+            let (sums, gradients): (Vec<_>, Vec<_>) = pairs.iter().copied().unzip();
+            let mut blocked = sums.clone();
+            choose_normals(&mut blocked, &gradients);
+            for ((&n, &g), &b) in sums.iter().zip(&gradients).zip(&blocked) {
+                let one = choose_normal(n, g);
+                prop_assert_eq!(one.map(f32::to_bits), b.map(f32::to_bits));
+                let wide = |v: [f32; 3]| v.map(f64::from);
+                let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                prop_assert!((len(wide(b)) - 1.0).abs() < 1e-5, "unit: {:?}", b);
+                let (wn, wg) = (wide(n), wide(g));
+                let (ln, lg) = (len(wn), len(wg));
+                let a = if ln > 0.0 { wn.map(|x| x / ln) } else { [0.0, 0.0, 1.0] };
+                let same = |v: [f64; 3]| (0..3).all(|k| (v[k] - b[k] as f64).abs() < 1e-5);
+                if lg > 0.0 {
+                    let u = wg.map(|x| x / lg);
+                    let d = u[0] * a[0] + u[1] * a[1] + u[2] * a[2];
+                    if d > 1e-4 {
+                        prop_assert!(same(u), "the gradient {:?} for {:?}, got {:?}", g, n, b);
+                    } else if d < -1e-4 {
+                        prop_assert!(same(a), "the sum {:?} against {:?}, got {:?}", n, g, b);
+                    }
+                } else {
+                    prop_assert!(same(a), "the sum {:?} without a gradient, got {:?}", n, b);
+                }
+            }
+        }
     }
 }

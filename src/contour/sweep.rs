@@ -62,8 +62,7 @@
 //! one plane per worker.
 
 use super::marching::{
-    Cancelled, TetTables, area_normal, edge_fraction, end_gradient, interpolated_downhill,
-    normalize, prefer_gradient,
+    Cancelled, TetTables, area_normal, choose_normals, downhill_vector, edge_fraction, end_gradient,
 };
 use super::seed::CutSides;
 use super::{ContourMesh, PathSeed};
@@ -303,12 +302,7 @@ fn sweep<T: Scalar>(
     normals
         .par_chunks_mut(1 << 14)
         .zip(downhill.par_chunks(1 << 14))
-        .for_each(|(normals, downhill)| {
-            normalize(normals);
-            for (n, g) in normals.iter_mut().zip(downhill) {
-                prefer_gradient(n, (*g != [0.0; 3]).then_some(*g));
-            }
-        });
+        .for_each(|(normals, downhill)| choose_normals(normals, downhill));
     drop(downhill);
 
     // Components: parents point down, so one ascending pass finds roots.
@@ -648,7 +642,7 @@ fn crossed_edges<T: Scalar>(
                     ((pb + s * (pa - pb)) * spacing[k]) as f32
                 });
                 let (gb, ga) = (ends.at(values, dims, b, cb), ends.at(values, dims, a, ca));
-                downhill_out[i] = interpolated_downhill(gb, ga, s, inverse).unwrap_or([0.0; 3]);
+                downhill_out[i] = downhill_vector(gb, ga, s, inverse);
                 on_face[i] = (0..3).any(|k| step[k] == 0 && (cv[k] == 0 || cv[k] + 1 == dims[k]));
                 i += 1;
             }
@@ -1065,12 +1059,7 @@ fn sweep_one<T: Scalar>(
     normals
         .par_chunks_mut(1 << 14)
         .zip(downhill.par_chunks(1 << 14))
-        .for_each(|(normals, downhill)| {
-            normalize(normals);
-            for (n, g) in normals.iter_mut().zip(downhill) {
-                prefer_gradient(n, (*g != [0.0; 3]).then_some(*g));
-            }
-        });
+        .for_each(|(normals, downhill)| choose_normals(normals, downhill));
     let touches_boundary = on_face.par_iter().any(|&f| f);
     Ok(Some(ContourMesh {
         arc: seed.arc,
