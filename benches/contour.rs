@@ -287,7 +287,7 @@ fn process_cpu() -> Option<f64> {
 /// The mesh made ready for the GPU, as the explorer's worker does.
 fn prepare(mesh: &flexiso::contour::ContourMesh) -> flexiso::render::PreparedMesh {
     let (p, n, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
-    flexiso::render::PreparedMesh::new_wound(p, n, i, mesh.ccw_outward, Default::default())
+    flexiso::render::PreparedMesh::new_known(p, n, i, mesh.into(), Default::default())
         .expect("a contour is a valid mesh")
 }
 
@@ -450,7 +450,7 @@ fn scripted_drag(
             .unwrap_or_default();
         let (p, n, i) = (&m.positions, &m.normals, &m.indices);
         let prepared = std::sync::Arc::new(
-            flexiso::render::PreparedMesh::new_wound(p, n, i, m.ccw_outward, spare_gpu)
+            flexiso::render::PreparedMesh::new_known(p, n, i, (&m).into(), spare_gpu)
                 .expect("a contour is a valid mesh"),
         );
         par.push(t.elapsed().as_secs_f64() * 1e3);

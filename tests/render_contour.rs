@@ -3,11 +3,12 @@
 //! isosurface, rendered headless and picked. Needs an adapter: skipped
 //! without one unless `FLEXISO_REQUIRE_GPU=1`.
 
-use flexiso::contour::{self, ContourFollower};
-use flexiso::field::Isovalue;
+use flexiso::contour::{self, ContourFollower, ContourMesh};
 use flexiso::field::synthetic::Synthetic;
+use flexiso::field::{Isovalue, ScalarField, Values};
 use flexiso::progress::Progress;
-use flexiso::render::{Camera, DEFAULT_BACKGROUND, Renderer};
+use flexiso::render::geometry::Corners;
+use flexiso::render::{Camera, DEFAULT_BACKGROUND, Known, PreparedMesh, Renderer};
 use flexiso::tree::{ArcId, ContourTree};
 use glam::Vec3;
 
@@ -195,4 +196,125 @@ fn all_contours_render_and_each_is_pickable() {
         "{hits} of {} picked",
         meshes.len()
     );
+}
+
+/// Every spanning arc's contour at `iso`, extracted by the sweep.
+fn swept_contours(field: &ScalarField, iso: f64) -> Vec<ContourMesh> {
+    let (tree, _) = ContourTree::from_field(field, &Progress::new()).expect("tree");
+    let iso = Isovalue::new(iso);
+    let mut sweep = ContourFollower::new(field).with_serial_limit(0);
+    (0..tree.arcs().len() as u32)
+        .filter_map(|a| contour::path_seed(&tree, field, ArcId(a), iso))
+        .map(|seed| {
+            sweep
+                .extract(&tree, &seed, iso, &|| false)
+                .expect("not cancelled")
+        })
+        .collect()
+}
+
+/// The mesh prepared for the GPU as a maker that knows nothing but the
+/// winding (a pass over positions for the box, over the triangles for the
+/// runs).
+fn prepared_from_scratch(m: &ContourMesh) -> PreparedMesh {
+    let known = Known {
+        ccw_outward: m.ccw_outward,
+        ..Known::default()
+    };
+    PreparedMesh::new_known(
+        &m.positions,
+        &m.normals,
+        &m.indices,
+        known,
+        PreparedMesh::default(),
+    )
+    .expect("a contour is a valid mesh")
+}
+
+/// What the sweep knows of a contour (its box, its triangles by cube
+/// layer) prepares the same GPU mesh as passes over it: the same
+/// quantised vertices in the same box, every corner as it was; the
+/// layers' 16-bit runs when a run can hold a layer (a head-sized sphere:
+/// several runs), the scan's when not (a plane of 90,000 vertices); bands
+/// that lie about their corners are caught as the corners are written.
+#[test]
+fn what_the_sweep_knows_prepares_the_same_gpu_mesh() {
+    let n = 110usize;
+    let c = (n - 1) as f64 / 2.0;
+    let ball: Vec<f32> = (0..n * n * n)
+        .map(|v| {
+            let [x, y, z] = [v % n, v / n % n, v / (n * n)].map(|k| k as f64 - c);
+            let wobble = (x * 0.3).sin() * (y * 0.2).cos() + (z * 0.25).sin();
+            ((x * x + y * y + z * z).sqrt() + wobble) as f32
+        })
+        .collect();
+    let ball = ScalarField::new([n; 3], Values::F32(ball)).expect("valid");
+    let (m, k) = (300usize, 4usize);
+    let sheet: Vec<f32> = (0..m * m * k)
+        .map(|v| {
+            let [x, y, z] = [v % m, v / m % m, v / (m * m)].map(|k| k as f64);
+            (z + 0.3 * ((x * 0.7).sin() * (y * 1.3).cos())) as f32
+        })
+        .collect();
+    let sheet = ScalarField::new([m, m, k], Values::F32(sheet)).expect("valid");
+    let mut cases = vec![
+        (swept_contours(&ball, 50.0), true),
+        (swept_contours(&sheet, 1.5), false),
+        (swept_contours(&Synthetic::cube(N).generate(), 0.45), true),
+    ];
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    for _ in 0..12 {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let d = [
+            5 + state % 11,
+            5 + (state >> 8) % 11,
+            5 + (state >> 16) % 11,
+        ]
+        .map(|d| d as usize);
+        let mut s = state;
+        let values: Vec<u8> = (0..d[0] * d[1] * d[2])
+            .map(|_| {
+                s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                (s >> 61) as u8
+            })
+            .collect();
+        let field = ScalarField::new(d, Values::U8(values)).expect("valid");
+        cases.push((swept_contours(&field, 3.5), true));
+    }
+    let mut several_runs = false;
+    for (meshes, banded) in cases {
+        assert!(!meshes.is_empty());
+        for mesh in &meshes {
+            assert!(
+                mesh.bounds.is_some() && !mesh.bands.is_empty(),
+                "the sweep knows"
+            );
+            let want = prepared_from_scratch(mesh);
+            let (p, nr, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
+            let got = PreparedMesh::new_known(p, nr, i, mesh.into(), PreparedMesh::default())
+                .expect("valid");
+            assert_eq!(got.gpu_vertices(), want.gpu_vertices(), "quantised alike");
+            assert_eq!(got.bounds(), want.bounds(), "the same box");
+            assert_eq!(got.corners().to_absolute(), mesh.indices, "every corner");
+            if let Corners::Short { runs, .. } = got.corners() {
+                several_runs |= runs.len() > 1;
+                // The runs are the bands', joined: no scan was made.
+                let band_start = |r: u32| mesh.bands.iter().any(|b| b.corners.start == r);
+                assert!(!banded || runs.iter().all(|r| band_start(r.start)));
+            } else if banded {
+                panic!("{} triangles in 32-bit corners", mesh.num_triangles());
+            }
+            // Bands that claim the wrong vertices: the scan's runs.
+            let mut lying = mesh.clone();
+            for b in &mut lying.bands {
+                b.vertices.start += 1;
+            }
+            let got = PreparedMesh::new_known(p, nr, i, (&lying).into(), PreparedMesh::default())
+                .expect("valid");
+            assert_eq!(got.corners(), want.corners(), "the scan's runs");
+        }
+    }
+    assert!(several_runs, "a contour in several 16-bit runs");
 }

@@ -27,7 +27,7 @@ pub fn prepare(mesh: &ContourMesh) -> Option<Arc<PreparedMesh>> {
 /// [`prepare`] into `spare`'s arrays ([`PreparedMesh::new_reusing`]).
 pub fn prepare_reusing(mesh: &ContourMesh, spare: PreparedMesh) -> Option<Arc<PreparedMesh>> {
     let (p, n, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
-    match PreparedMesh::new_wound(p, n, i, mesh.ccw_outward, spare) {
+    match PreparedMesh::new_known(p, n, i, mesh.into(), spare) {
         Ok(m) => Some(Arc::new(m)),
         Err(e) => {
             eprintln!(

@@ -917,6 +917,8 @@ impl DraggedContour {
             indices,
             touches_boundary: self.boundary > 0,
             ccw_outward: None,
+            bounds: None,
+            bands: Vec::new(),
         })
     }
 }

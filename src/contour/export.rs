@@ -555,6 +555,8 @@ mod coloured_tests {
             indices: vec![0, 1, 2],
             touches_boundary: true,
             ccw_outward: None,
+            bounds: None,
+            bands: Vec::new(),
         }
     }
 

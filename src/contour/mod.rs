@@ -108,6 +108,27 @@ pub struct ContourMesh {
     /// outside. Known when the extraction knew it without a pass over the
     /// triangles (the sweep knows every vertex's side); None otherwise.
     pub ccw_outward: Option<bool>,
+    /// The box of the positions (least and greatest coordinate per axis),
+    /// when the extraction knew it without a pass over them; None
+    /// otherwise, and after the positions move ([`ContourMesh::to_frame`]).
+    pub bounds: Option<[[f32; 3]; 2]>,
+    /// Stretches of the triangles whose corners lie in a known range of
+    /// vertices, in order and covering every corner, when the extraction
+    /// knew them (the sweep: one per cube layer, whose triangles' corners
+    /// lie on the edges owned by the layer's two planes); empty otherwise.
+    /// The GPU's preparation finds its 16-bit index runs from them without
+    /// a pass over the triangles.
+    pub bands: Vec<TriangleBand>,
+}
+
+/// Triangle corners `indices[corners]` that all lie in `vertices`: see
+/// [`ContourMesh::bands`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TriangleBand {
+    /// The band's triangle corners, as a range of the mesh's indices.
+    pub corners: std::ops::Range<u32>,
+    /// The vertices every one of those corners lies in.
+    pub vertices: std::ops::Range<u32>,
 }
 
 impl ContourMesh {
@@ -121,6 +142,8 @@ impl ContourMesh {
             indices: Vec::new(),
             touches_boundary: false,
             ccw_outward: None,
+            bounds: None,
+            bands: Vec::new(),
         }
     }
 
@@ -203,6 +226,9 @@ impl ContourMesh {
         let g = field.geometry();
         let f64s = |p: [f32; 3]| p.map(f64::from);
         let f32s = |p: [f64; 3]| p.map(|x| x as f32);
+        if frame != Frame::Grid {
+            self.bounds = None;
+        }
         match frame {
             Frame::Grid => {}
             Frame::Index => {

@@ -10,6 +10,7 @@
 //! costs about 5 ns per triangle tested (rayon splits meshes above
 //! [`PARALLEL_TRIANGLES`]).
 
+use crate::contour::TriangleBand;
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
@@ -163,16 +164,36 @@ impl Corners {
     /// enough.
     fn new(indices: &[u32], runs: Vec<IndexRun>, spare: Corners) -> Corners {
         let triangles = indices.len() / 3;
-        let (spare_short, spare_long) = match spare {
-            Corners::Short { indices, .. } => (indices, Vec::new()),
-            Corners::Long(i) => (Vec::new(), i),
-        };
-        if runs.len() > 1 && runs.len() * MIN_RUN_TRIANGLES > triangles {
+        if !short_pays(runs.len(), triangles) {
+            let spare_long = match spare {
+                Corners::Long(i) => i,
+                Corners::Short { .. } => Vec::new(),
+            };
             return Corners::Long(crate::pages::copied(spare_long, indices));
         }
+        // The scan's runs hold their corners by construction.
+        Corners::short(indices, runs, spare, u32::MAX)
+            .unwrap_or_else(|_| Corners::Long(indices.to_vec()))
+    }
+
+    /// The 16-bit form in `runs` (each covering its corners' ascending
+    /// stretch), checking as it writes that every corner lies in its run's
+    /// reach and below `vertices`: `Err` with `spare` (as far as it was
+    /// used) when one does not.
+    fn short(
+        indices: &[u32],
+        runs: Vec<IndexRun>,
+        spare: Corners,
+        vertices: u32,
+    ) -> Result<Corners, Corners> {
+        let spare_short = match spare {
+            Corners::Short { indices, .. } => indices,
+            Corners::Long(_) => Vec::new(),
+        };
         let mut short =
             crate::pages::refilled(spare_short, indices.len() + indices.len() % 2, 0u16);
-        let write = |out: &mut [u16], from: usize| {
+        let write = |out: &mut [u16], from: usize| -> bool {
+            let mut inside = true;
             // The runs within this stretch of indices.
             let first = runs.partition_point(|r| (r.end as usize) <= from);
             for r in &runs[first..] {
@@ -182,22 +203,73 @@ impl Corners {
                 }
                 let (s, e) = (s.max(from), e.min(from + out.len()));
                 for (o, &i) in out[s - from..e - from].iter_mut().zip(&indices[s..e]) {
-                    *o = (i - r.base) as u16;
+                    let d = i.wrapping_sub(r.base);
+                    inside &= (d <= u16::MAX as u32) & (i < vertices);
+                    *o = d as u16;
                 }
             }
+            inside
         };
-        if indices.len() > SCAN_CHUNK {
+        let inside = if indices.len() > SCAN_CHUNK {
             short[..indices.len()]
                 .par_chunks_mut(SCAN_CHUNK)
                 .enumerate()
-                .for_each(|(c, out)| write(out, c * SCAN_CHUNK));
+                .map(|(c, out)| write(out, c * SCAN_CHUNK))
+                .reduce(|| true, |a, b| a & b)
         } else {
-            write(&mut short[..indices.len()], 0);
+            write(&mut short[..indices.len()], 0)
+        };
+        let covered = runs.last().map_or(0, |r| r.end as usize) == indices.len();
+        if inside && covered {
+            Ok(Corners::Short {
+                indices: short,
+                runs,
+            })
+        } else {
+            Err(Corners::Short {
+                indices: short,
+                runs: Vec::new(),
+            })
         }
-        Corners::Short {
-            indices: short,
-            runs,
+    }
+
+    /// The 16-bit runs of a mesh whose maker gave its [`TriangleBand`]s:
+    /// consecutive bands joined while the vertices they reach span at most
+    /// 65,536, with no pass over the corners. None when the bands do not
+    /// cover the `corners` in order, one band alone spans more, or the
+    /// runs are too short to pay ([`MIN_RUN_TRIANGLES`]).
+    fn runs_of_bands(bands: &[TriangleBand], corners: usize) -> Option<Vec<IndexRun>> {
+        let reach = u16::MAX as u32 + 1;
+        let mut runs: Vec<IndexRun> = Vec::new();
+        // The open run and the end of the vertices it reaches.
+        let mut open: Option<(IndexRun, u32)> = None;
+        let mut next = 0u32;
+        for b in bands {
+            let (c, v) = (&b.corners, &b.vertices);
+            if c.start != next || c.end < c.start || v.end < v.start || v.end - v.start > reach {
+                return None;
+            }
+            next = c.end;
+            if c.is_empty() {
+                continue;
+            }
+            open = Some(match open {
+                Some((run, end)) if v.start >= run.base && v.end.max(end) - run.base <= reach => {
+                    (IndexRun { end: c.end, ..run }, v.end.max(end))
+                }
+                other => {
+                    runs.extend(other.map(|(run, _)| run));
+                    let run = IndexRun {
+                        start: c.start,
+                        end: c.end,
+                        base: v.start,
+                    };
+                    (run, v.end)
+                }
+            });
         }
+        runs.extend(open.map(|(run, _)| run));
+        (next as usize == corners && short_pays(runs.len(), corners / 3)).then_some(runs)
     }
 
     /// Number of triangle corners (three per triangle).
@@ -261,6 +333,12 @@ impl Corners {
 /// Fewest triangles per 16-bit run on average for [`Corners::Short`].
 pub const MIN_RUN_TRIANGLES: usize = 1024;
 
+/// Whether `runs` 16-bit runs over `triangles` triangles pay for their
+/// draws (one run always does).
+fn short_pays(runs: usize, triangles: usize) -> bool {
+    runs <= 1 || runs * MIN_RUN_TRIANGLES <= triangles
+}
+
 /// `n` (any length) in the octahedral encoding of [`GpuVertex::normal`];
 /// a zero or non-finite vector becomes +z.
 pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
@@ -295,6 +373,31 @@ pub fn decode_normal(e: [i16; 2]) -> [f32; 3] {
         z,
     );
     n.normalize_or(Vec3::Z).to_array()
+}
+
+/// What a mesh's maker knows of it without a pass over its arrays (see
+/// [`PreparedMesh::new_known`]); [`Known::default`] knows nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Known<'a> {
+    /// Whether its triangles wind counter-clockwise seen from outside
+    /// ([`crate::contour::ContourMesh::ccw_outward`]): spares the signed
+    /// volume's gathers. The bands are only read when this is known.
+    pub ccw_outward: Option<bool>,
+    /// The box of its positions ([`crate::contour::ContourMesh::bounds`]).
+    pub bounds: Option<[[f32; 3]; 2]>,
+    /// Its triangle bands ([`crate::contour::ContourMesh::bands`]): spare
+    /// the pass that finds the 16-bit runs.
+    pub bands: &'a [TriangleBand],
+}
+
+impl<'a> From<&'a crate::contour::ContourMesh> for Known<'a> {
+    fn from(m: &'a crate::contour::ContourMesh) -> Self {
+        Known {
+            ccw_outward: m.ccw_outward,
+            bounds: m.bounds,
+            bands: &m.bands,
+        }
+    }
 }
 
 /// A mesh made ready for the GPU: validated, normals computed when it came
@@ -357,19 +460,19 @@ impl PreparedMesh {
         indices: &[u32],
         spare: PreparedMesh,
     ) -> Result<Self, String> {
-        Self::new_wound(positions, normals, indices, None, spare)
+        Self::new_known(positions, normals, indices, Known::default(), spare)
     }
 
-    /// [`PreparedMesh::new_reusing`] told, when its maker knows it, whether
-    /// the triangles wind counter-clockwise seen from outside (a closed
-    /// contour from the sweep: [`crate::contour::ContourMesh::ccw_outward`]):
-    /// the pass over the triangles then reads no positions (the signed
-    /// volume's gathers: 4-5 ms of a 5.4 M-triangle head's 45-50 ms).
-    pub fn new_wound(
+    /// [`PreparedMesh::new_reusing`] told what the mesh's maker knows of it
+    /// ([`Known`]): each thing known spares a pass over the mesh (a
+    /// 5.4 M-triangle head from the sweep: 45 ms to prepare, 19 ms with
+    /// all three known). The result is the same mesh; only its 16-bit runs
+    /// may be cut elsewhere.
+    pub fn new_known(
         positions: &[[f32; 3]],
         normals: &[[f32; 3]],
         indices: &[u32],
-        ccw_outward: Option<bool>,
+        known: Known<'_>,
         spare: PreparedMesh,
     ) -> Result<Self, String> {
         if !normals.is_empty() && normals.len() != positions.len() {
@@ -392,20 +495,44 @@ impl PreparedMesh {
             ));
         }
         let n = positions.len();
-        let bbox = bbox_of(positions, indices);
-        let centre = if bbox.0.cmple(bbox.1).all() {
-            0.5 * (bbox.0 + bbox.1)
-        } else {
-            Vec3::ZERO
+        let bbox = match known.bounds {
+            Some([lo, hi]) if !indices.is_empty() => (Vec3::from(lo), Vec3::from(hi)),
+            _ => bbox_of(positions, indices),
         };
-        let centre = ccw_outward.is_none().then_some(centre.into());
-        let scan = TriangleScan::new(positions, indices, centre);
-        if let Some(bad) = scan.out_of_range {
-            return Err(format!(
-                "index {bad} is out of range for {} positions",
-                positions.len()
-            ));
-        }
+        // The corners in the bands' 16-bit runs, checked as they are
+        // written; a scan of the triangles otherwise, or when one fails.
+        let (banded, spare_corners) = match (known.ccw_outward, n > u32::MAX as usize) {
+            (Some(_), false) => match Corners::runs_of_bands(known.bands, indices.len()) {
+                Some(runs) => match Corners::short(indices, runs, spare.indices, n as u32) {
+                    Ok(c) => (Some(c), Corners::Long(Vec::new())),
+                    Err(spare) => (None, spare),
+                },
+                None => (None, spare.indices),
+            },
+            _ => (None, spare.indices),
+        };
+        let (indices_out, volume6) = match banded {
+            Some(c) => (c, 0.0),
+            None => {
+                let centre = if bbox.0.cmple(bbox.1).all() {
+                    0.5 * (bbox.0 + bbox.1)
+                } else {
+                    Vec3::ZERO
+                };
+                let centre = known.ccw_outward.is_none().then_some(centre.into());
+                let scan = TriangleScan::new(positions, indices, centre);
+                if let Some(bad) = scan.out_of_range {
+                    return Err(format!(
+                        "index {bad} is out of range for {} positions",
+                        positions.len()
+                    ));
+                }
+                (
+                    Corners::new(indices, scan.runs, spare_corners),
+                    scan.volume6,
+                )
+            }
+        };
         let computed;
         let normals = if normals.is_empty() {
             computed = compute_normals(positions, indices);
@@ -445,12 +572,11 @@ impl PreparedMesh {
         } else {
             positions.iter().zip(normals).map(quantise).collect()
         };
-        let indices = Corners::new(indices, scan.runs, spare.indices);
         Ok(PreparedMesh {
             vertices,
-            indices,
+            indices: indices_out,
             bbox,
-            ccw_outward: ccw_outward.unwrap_or(scan.volume6 >= 0.0),
+            ccw_outward: known.ccw_outward.unwrap_or(volume6 >= 0.0),
         })
     }
 

@@ -83,7 +83,7 @@ mod renderer;
 pub use camera::{Camera, ViewPreset};
 pub use context::{ClipPlane, CutBox, SliceQuad, label_anchor};
 pub use egui_texture::EguiTexture;
-pub use geometry::{PreparedMesh, compute_normals, icosphere};
+pub use geometry::{Known, PreparedMesh, compute_normals, icosphere};
 pub use headless::{Gpu, HeadlessMesh, HeadlessScene, render_scene_to_image, render_to_image};
 pub use renderer::{
     COLOUR_FORMAT, DEFAULT_BACKGROUND, DEFAULT_COLOUR, DEPTH_FORMAT, MeshStyle, Renderer,

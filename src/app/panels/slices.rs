@@ -656,6 +656,8 @@ mod tests {
             indices,
             touches_boundary: false,
             ccw_outward: None,
+            bounds: None,
+            bands: Vec::new(),
         };
         let mut p = SlicePanel::new(None);
         p.set_field(&field);
