@@ -389,9 +389,10 @@ fn serial_vs_parallel(
 }
 
 /// A scripted drag of `steps` steps of one value unit along `arc` from
-/// `iso` (towards the arc's farther end): per step, the new isovalue to
-/// the mesh ready for upload, by the serial follower and by the parallel
-/// extraction, and with a GPU the frames the upload takes within the
+/// `iso` (towards the arc's farther end, turning back at its chain's
+/// end): per step, the new isovalue to the mesh ready for upload, by the
+/// serial follower and by the parallel extraction, and with a GPU the
+/// frames the upload takes within the
 /// explorer's per-frame budget.
 fn scripted_drag(
     name: &str,
@@ -418,11 +419,24 @@ fn scripted_drag(
     let mut last = None;
     let mut old_meshes = std::collections::VecDeque::new();
     let mut old_gpu = std::collections::VecDeque::new();
-    for step in 1..=steps {
-        let iso = Isovalue::new(iso.value + dir * step as f64);
-        let Some(seed) = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso) else {
+    // At an end of the chain the drag turns back, as a hand does.
+    let (mut at, mut way, mut turns) = (iso.value, dir, 0);
+    for _ in 1..=steps {
+        let mut found = None;
+        for _ in 0..2 {
+            let iso = Isovalue::new(at + way);
+            found = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso);
+            if found.is_some() {
+                break;
+            }
+            way = -way;
+            turns += 1;
+        }
+        let Some(seed) = found else {
             break;
         };
+        at += way;
+        let iso = Isovalue::new(at);
         let arc = seed.arc;
         let t = Instant::now();
         let m = serial.follow(&seed, iso);
@@ -483,7 +497,7 @@ fn scripted_drag(
     let ((fm, fw), (um, uw)) = (stats(&frames), stats(&upload));
     println!(
         "{name}: scripted drag of {} steps of {dir:+} from h = {} from arc {start:?} \
-         ({}..{} triangles): new isovalue to mesh ready for upload, median / worst step: \
+         ({turns} turns at the chain's ends; {}..{} triangles): new isovalue to mesh ready for upload, median / worst step: \
          serial {sm:.0} / {sw:.0} ms, parallel {pm:.0} / {pw:.0} ms; upload in {fm} / {fw} \
          frames of at most {} MiB, slowest frame's copy {um:.1} / {uw:.1} ms",
         par.len(),

@@ -22,8 +22,13 @@ const HUGE: usize = 4 << 20;
 /// An array of `n` copies of `value`, on huge pages when it is large,
 /// filled on every core (so the pages are first touched in parallel).
 pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
-    let mut v: Vec<T> = Vec::with_capacity(n);
-    advise(v.as_ptr() as *const u8, n * size_of::<T>());
+    filled_within(n, n, value)
+}
+
+/// [`filled`] in an allocation of `capacity` (at least `n`).
+fn filled_within<T: Copy + Send + Sync>(n: usize, capacity: usize, value: T) -> Vec<T> {
+    let mut v: Vec<T> = Vec::with_capacity(capacity.max(n));
+    advise(v.as_ptr() as *const u8, v.capacity() * size_of::<T>());
     v.spare_capacity_mut()[..n]
         .par_chunks_mut(1 << 16)
         .for_each(|c| c.iter_mut().for_each(|x| _ = x.write(value)));
@@ -37,8 +42,9 @@ pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
 /// which on a large mesh costs as much as making it), else [`filled`].
 pub fn refilled<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
     if spare.capacity() < n {
+        let capacity = headroom(spare.capacity(), n);
         drop(spare);
-        return filled(n, value);
+        return filled_within(n, capacity, value);
     }
     spare.truncate(n);
     spare.par_chunks_mut(1 << 16).for_each(|c| c.fill(value));
@@ -52,8 +58,9 @@ pub fn refilled<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) ->
 /// A recycled array costs neither fresh pages nor a fill.
 pub fn reused<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
     if spare.capacity() < n {
+        let capacity = headroom(spare.capacity(), n);
         drop(spare);
-        return filled(n, value);
+        return filled_within(n, capacity, value);
     }
     spare.truncate(n);
     spare.resize(n, value);
@@ -65,8 +72,11 @@ pub fn reused<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> V
 pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {
     let n = from.len();
     if spare.capacity() < n {
-        spare = Vec::with_capacity(n);
-        advise(spare.as_ptr() as *const u8, std::mem::size_of_val(from));
+        spare = Vec::with_capacity(headroom(spare.capacity(), n));
+        advise(
+            spare.as_ptr() as *const u8,
+            spare.capacity() * size_of::<T>(),
+        );
     }
     spare.truncate(n);
     let old = spare.len();
@@ -86,6 +96,19 @@ pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {
     // SAFETY: the elements from `old` to `n` were all written just above.
     unsafe { spare.set_len(n) };
     spare
+}
+
+/// The capacity for `n` elements in place of a recycled array of
+/// `recycled` that is too small: a quarter more than asked, so that the
+/// slightly larger arrays of the next steps (a dragged contour grows a
+/// little with each) fit in it instead of each step faulting in and
+/// zeroing fresh pages; exactly `n` when nothing was recycled.
+pub fn headroom(recycled: usize, n: usize) -> usize {
+    if recycled > 0 {
+        n.saturating_add(n / 4)
+    } else {
+        n
+    }
 }
 
 /// An array written from several threads at once, each slot by one of
@@ -244,6 +267,20 @@ mod tests {
                 assert_eq!(c, &from[..n]);
                 if fits && spare_len > 0 {
                     assert_eq!(c.as_ptr(), at, "the old allocation");
+                }
+                // A recycled array too small is replaced by one with room
+                // for the next, slightly larger, steps; a first one is
+                // exact.
+                let spare: Vec<u32> = vec![9; spare_len];
+                let r = reused(spare, n, 7u32);
+                assert_eq!(r.len(), n);
+                let room = if fits || spare_len == 0 { n } else { n + n / 4 };
+                assert!(r.capacity() >= room, "{} for {n}", r.capacity());
+                let grown = r.len() + r.len() / 5;
+                if !fits && spare_len > 0 {
+                    let at = r.as_ptr();
+                    let again = reused(r, grown, 7u32);
+                    assert_eq!(again.as_ptr(), at, "a fifth more fits");
                 }
             }
         }

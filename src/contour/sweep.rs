@@ -1035,8 +1035,10 @@ fn sweep_one<T: Scalar>(
     let mut positions = crate::pages::reused(spare.positions, n, [0f32; 3]);
     // Every entry is written below: no need to clear them.
     if downhill.len() < n {
-        *downhill = crate::pages::filled(n, [0f32; 3]);
-        *on_face = crate::pages::filled(n, false);
+        // With room for the next steps of a drag (see `pages::headroom`).
+        let grown = crate::pages::headroom(downhill.len(), n);
+        *downhill = crate::pages::filled(grown, [0f32; 3]);
+        *on_face = crate::pages::filled(grown, false);
     }
     let (downhill, on_face) = (&mut downhill[..n], &mut on_face[..n]);
     // Runs of consecutive planes, each with its own kept gradient table (a

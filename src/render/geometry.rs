@@ -190,8 +190,11 @@ impl Corners {
             Corners::Short { indices, .. } => indices,
             Corners::Long(_) => Vec::new(),
         };
-        let mut short =
-            crate::pages::refilled(spare_short, indices.len() + indices.len() % 2, 0u16);
+        // Every corner is written below; the pad is set here.
+        let mut short = crate::pages::reused(spare_short, indices.len() + indices.len() % 2, 0u16);
+        if let Some(pad) = short.get_mut(indices.len()) {
+            *pad = 0;
+        }
         let write = |out: &mut [u16], from: usize| -> bool {
             let mut inside = true;
             // The runs within this stretch of indices.
@@ -340,22 +343,72 @@ fn short_pays(runs: usize, triangles: usize) -> bool {
 }
 
 /// `n` (any length) in the octahedral encoding of [`GpuVertex::normal`];
-/// a zero or non-finite vector becomes +z.
+/// a zero or non-finite vector becomes +z. Without a branch, so that a
+/// loop over vertices vectorises.
+#[inline(always)]
 pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
-    if !(l1 > 0.0 && l1.is_finite()) {
-        return [0, 0];
-    }
-    let (mut x, mut y) = (n[0] / l1, n[1] / l1);
-    if n[2] < 0.0 {
-        let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
-        (x, y) = ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y));
-    }
-    // Round half away from zero without a libm call (the cast truncates).
-    [x, y].map(|v| {
+    let valid = (l1 > 0.0) & l1.is_finite();
+    let (x, y) = (n[0] / l1, n[1] / l1);
+    let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
+    let folded = ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y));
+    let (x, y) = if n[2] < 0.0 { folded } else { (x, y) };
+    // Round half away from zero without a libm call (the cast truncates;
+    // a NaN casts to 0).
+    let e = [x, y].map(|v| {
         let v = v.clamp(-1.0, 1.0) * 32767.0;
         (v + 0.5f32.copysign(v)) as i16
-    })
+    });
+    if valid { e } else { [0, 0] }
+}
+
+/// Writes each position quantised in the box from `origin` at `step` per
+/// unit, and its normal octahedral, into `out`. Eight vertices at a time,
+/// their coordinates gathered lane by lane and worked without a branch (a
+/// non-finite coordinate casts to 0), so that the arithmetic vectorises.
+fn quantise_vertices(
+    out: &mut [GpuVertex],
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    origin: [f32; 3],
+    step: [f32; 3],
+) {
+    const LANES: usize = 8;
+    #[inline(always)]
+    fn coordinate(p: f32, origin: f32, step: f32) -> u16 {
+        let q = ((p - origin) * step).clamp(0.0, Q);
+        // Rounding of a non-negative value without a libm call (the cast
+        // truncates): a third of the pass otherwise.
+        (q + 0.5) as u16
+    }
+    let mut out_blocks = out.chunks_exact_mut(LANES);
+    let mut p_blocks = positions.chunks_exact(LANES);
+    let mut n_blocks = normals.chunks_exact(LANES);
+    for ((o, p), nr) in (&mut out_blocks).zip(&mut p_blocks).zip(&mut n_blocks) {
+        let (mut q, mut e) = ([[0u16; 3]; LANES], [[0i16; 2]; LANES]);
+        for k in 0..LANES {
+            q[k] = std::array::from_fn(|a| coordinate(p[k][a], origin[a], step[a]));
+            e[k] = encode_normal(nr[k]);
+        }
+        for k in 0..LANES {
+            o[k] = GpuVertex {
+                position: [q[k][0], q[k][1], q[k][2], 0],
+                normal: e[k],
+            };
+        }
+    }
+    let rest = out_blocks.into_remainder();
+    for ((o, p), nr) in rest
+        .iter_mut()
+        .zip(p_blocks.remainder())
+        .zip(n_blocks.remainder())
+    {
+        let q: [u16; 3] = std::array::from_fn(|a| coordinate(p[a], origin[a], step[a]));
+        *o = GpuVertex {
+            position: [q[0], q[1], q[2], 0],
+            normal: encode_normal(*nr),
+        };
+    }
 }
 
 /// The unit vector of an octahedral [`GpuVertex::normal`] (what the vertex
@@ -541,36 +594,27 @@ impl PreparedMesh {
             normals
         };
         let (origin, step) = quantisation(bbox);
-        let quantise = |(p, nr): (&[f32; 3], &[f32; 3])| {
-            let q = ((Vec3::from(*p) - origin) * step).clamp(Vec3::ZERO, Vec3::splat(Q));
-            let q = if q.is_finite() { q } else { Vec3::ZERO };
-            // Rounding of a non-negative value without a libm call (the
-            // cast truncates): a third of the pass otherwise.
-            let q = q + Vec3::splat(0.5);
-            GpuVertex {
-                position: [q.x as u16, q.y as u16, q.z as u16, 0],
-                normal: encode_normal(*nr),
-            }
+        let quantise = |out: &mut [GpuVertex], p: &[[f32; 3]], nr: &[[f32; 3]]| {
+            quantise_vertices(out, p, nr, origin.to_array(), step.to_array());
         };
         let parallel = n > PARALLEL_VERTICES;
         let vertices = if parallel {
             // Written in place into huge pages: a fresh page's first touch
             // costs as much as the quantising.
-            let mut v = crate::pages::refilled(spare.vertices, n, GpuVertex::default());
+            // Every vertex is written below.
+            let mut v = crate::pages::reused(spare.vertices, n, GpuVertex::default());
             v.par_chunks_mut(1 << 14)
                 .zip(
                     positions
                         .par_chunks(1 << 14)
                         .zip(normals.par_chunks(1 << 14)),
                 )
-                .for_each(|(out, (p, nr))| {
-                    for (o, pn) in out.iter_mut().zip(p.iter().zip(nr)) {
-                        *o = quantise(pn);
-                    }
-                });
+                .for_each(|(out, (p, nr))| quantise(out, p, nr));
             v
         } else {
-            positions.iter().zip(normals).map(quantise).collect()
+            let mut v = vec![GpuVertex::default(); n];
+            quantise(&mut v, positions, normals);
+            v
         };
         Ok(PreparedMesh {
             vertices,
