@@ -40,16 +40,13 @@ fn filled_within<T: Copy + Send + Sync>(n: usize, capacity: usize, value: T) -> 
 /// `spare` made `n` copies of `value`, in its own allocation when that
 /// is large enough (a recycled array: no fresh page to fault in and zero,
 /// which on a large mesh costs as much as making it), else [`filled`].
-pub fn refilled<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
-    if spare.capacity() < n {
-        let capacity = headroom(spare.capacity(), n);
-        drop(spare);
-        return filled_within(n, capacity, value);
+pub fn refilled<T: Copy + Send + Sync>(spare: Vec<T>, n: usize, value: T) -> Vec<T> {
+    let recycled = spare.capacity() >= n;
+    let mut v = reused(spare, n, value);
+    if recycled {
+        v.par_chunks_mut(1 << 16).for_each(|c| c.fill(value));
     }
-    spare.truncate(n);
-    spare.par_chunks_mut(1 << 16).for_each(|c| c.fill(value));
-    spare.resize(n, value);
-    spare
+    v
 }
 
 /// An array of `n` elements for a caller that overwrites every one of

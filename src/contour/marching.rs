@@ -302,17 +302,9 @@ pub(crate) fn downhill_vector(gb: [f64; 3], ga: [f64; 3], s: f64, inverse: [f64;
 /// the piecewise-linear interpolant the triangles come from.
 #[inline]
 pub(crate) fn choose_normal(n: [f32; 3], g: [f32; 3]) -> [f32; 3] {
-    let (ln, lg) = (dot(n, n), dot(g, g));
-    if plain_length(ln) && (lg == 0.0 || plain_length(lg)) {
-        // Every vertex but those of degenerate triangles or of extreme
-        // gradients: the same arithmetic as a lane of `choose_normals`.
-        let (v, l) = if lg != 0.0 && dot(n, g) > 0.0 {
-            (g, lg)
-        } else {
-            (n, ln)
-        };
-        let r = l.sqrt().recip();
-        return v.map(|x| x * r);
+    let (chosen, plain) = plain_choice(n, g);
+    if plain {
+        return chosen;
     }
     let a = unit(n).unwrap_or([0.0, 0.0, 1.0]);
     match unit(g) {
@@ -333,12 +325,9 @@ pub(crate) fn choose_normals(normals: &mut [[f32; 3]], downhill: &[[f32; 3]]) {
         let mut out = [[0f32; 3]; LANES];
         let mut plain = true;
         for k in 0..LANES {
-            let (ln, lg) = (dot(n[k], n[k]), dot(g[k], g[k]));
-            plain &= plain_length(ln) & ((lg == 0.0) | plain_length(lg));
-            let take = (lg != 0.0) & (dot(n[k], g[k]) > 0.0);
-            let (v, l) = if take { (g[k], lg) } else { (n[k], ln) };
-            let r = l.sqrt().recip();
-            out[k] = v.map(|x| x * r);
+            let (chosen, p) = plain_choice(n[k], g[k]);
+            out[k] = chosen;
+            plain &= p;
         }
         if plain {
             n.copy_from_slice(&out);
@@ -355,6 +344,20 @@ pub(crate) fn choose_normals(normals: &mut [[f32; 3]], downhill: &[[f32; 3]]) {
     {
         *n = choose_normal(*n, *g);
     }
+}
+
+/// [`choose_normal`] without a branch, for every vertex but those of
+/// degenerate triangles or extreme gradients; false for those (whose
+/// squared lengths are zero, tiny or huge), and the first value is then
+/// meaningless.
+#[inline(always)]
+fn plain_choice(n: [f32; 3], g: [f32; 3]) -> ([f32; 3], bool) {
+    let (ln, lg) = (dot(n, n), dot(g, g));
+    let plain = plain_length(ln) & ((lg == 0.0) | plain_length(lg));
+    let take = (lg != 0.0) & (dot(n, g) > 0.0);
+    let (v, l) = if take { (g, lg) } else { (n, ln) };
+    let r = l.sqrt().recip();
+    (v.map(|x| x * r), plain)
 }
 
 #[inline(always)]

@@ -243,7 +243,7 @@ fn sweep<T: Scalar>(
         .for_each_init(EndGradients::default, |ends, (z, (((p, g), f), n))| {
             n.fill([0.0; 3]);
             let rows = &active[ny * z..][..ny];
-            crossed_edges(values, field, &cubes, rows, iso, z, p, g, f, ends);
+            crossed_edges(values, field, &cubes, rows, iso, z, p, g, f, ends)
         });
 
     // 2. Triangles, counted per cube layer, then written slab by slab.
@@ -593,8 +593,7 @@ fn cube_masks(
 /// then offset: position, downhill gradient (zero where it vanishes) and
 /// whether the edge lies in a face of the box (then the contour through it
 /// is cut open there: the follower meets a crossed boundary face exactly
-/// when its contour has such a vertex). Returns the box of the positions
-/// (inverted when there are none).
+/// when its contour has such a vertex).
 #[allow(clippy::too_many_arguments)]
 fn crossed_edges<T: Scalar>(
     values: &[T],
@@ -607,7 +606,7 @@ fn crossed_edges<T: Scalar>(
     downhill_out: &mut [[f32; 3]],
     on_face: &mut [bool],
     ends: &mut EndGradients,
-) -> [[f32; 3]; 2] {
+) {
     let dims = field.dims();
     let [nx, ny, _] = dims;
     let spacing = field.spacing();
@@ -651,7 +650,6 @@ fn crossed_edges<T: Scalar>(
         }
     }
     debug_assert_eq!(i, positions.len());
-    bounds_of(positions)
 }
 
 /// The box of `points` (finite, as a contour's are), eight at a time: a
@@ -1066,8 +1064,9 @@ fn sweep_one<T: Scalar>(
             let mut bounds = NO_BOUNDS;
             for (z, ((p, g), f)) in planes.clone().zip(p.into_iter().zip(g).zip(f)) {
                 let rows = &active[ny * z..][..ny];
-                let b = crossed_edges(values, field, cubes, rows, iso, z, p, g, f, ends);
-                bounds = widen(bounds, b);
+                crossed_edges(values, field, cubes, rows, iso, z, p, g, f, ends);
+                // While the plane's positions are in cache.
+                bounds = widen(bounds, bounds_of(p));
             }
             bounds
         })

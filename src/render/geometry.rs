@@ -343,9 +343,8 @@ fn short_pays(runs: usize, triangles: usize) -> bool {
 }
 
 /// `n` (any length) in the octahedral encoding of [`GpuVertex::normal`];
-/// a zero or non-finite vector becomes +z. Without a branch, so that a
-/// loop over vertices vectorises.
-#[inline(always)]
+/// a zero or non-finite vector becomes +z.
+#[inline]
 pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
     let valid = (l1 > 0.0) & l1.is_finite();
@@ -363,9 +362,8 @@ pub fn encode_normal(n: [f32; 3]) -> [i16; 2] {
 }
 
 /// Writes each position quantised in the box from `origin` at `step` per
-/// unit, and its normal octahedral, into `out`. Eight vertices at a time,
-/// their coordinates gathered lane by lane and worked without a branch (a
-/// non-finite coordinate casts to 0), so that the arithmetic vectorises.
+/// unit (a non-finite coordinate casts to 0), and its normal octahedral,
+/// into `out`.
 fn quantise_vertices(
     out: &mut [GpuVertex],
     positions: &[[f32; 3]],
@@ -373,37 +371,13 @@ fn quantise_vertices(
     origin: [f32; 3],
     step: [f32; 3],
 ) {
-    const LANES: usize = 8;
-    #[inline(always)]
-    fn coordinate(p: f32, origin: f32, step: f32) -> u16 {
-        let q = ((p - origin) * step).clamp(0.0, Q);
-        // Rounding of a non-negative value without a libm call (the cast
-        // truncates): a third of the pass otherwise.
-        (q + 0.5) as u16
-    }
-    let mut out_blocks = out.chunks_exact_mut(LANES);
-    let mut p_blocks = positions.chunks_exact(LANES);
-    let mut n_blocks = normals.chunks_exact(LANES);
-    for ((o, p), nr) in (&mut out_blocks).zip(&mut p_blocks).zip(&mut n_blocks) {
-        let (mut q, mut e) = ([[0u16; 3]; LANES], [[0i16; 2]; LANES]);
-        for k in 0..LANES {
-            q[k] = std::array::from_fn(|a| coordinate(p[k][a], origin[a], step[a]));
-            e[k] = encode_normal(nr[k]);
-        }
-        for k in 0..LANES {
-            o[k] = GpuVertex {
-                position: [q[k][0], q[k][1], q[k][2], 0],
-                normal: e[k],
-            };
-        }
-    }
-    let rest = out_blocks.into_remainder();
-    for ((o, p), nr) in rest
-        .iter_mut()
-        .zip(p_blocks.remainder())
-        .zip(n_blocks.remainder())
-    {
-        let q: [u16; 3] = std::array::from_fn(|a| coordinate(p[a], origin[a], step[a]));
+    for (o, (p, nr)) in out.iter_mut().zip(positions.iter().zip(normals)) {
+        let q: [u16; 3] = std::array::from_fn(|a| {
+            let q = ((p[a] - origin[a]) * step[a]).clamp(0.0, Q);
+            // Rounding of a non-negative value without a libm call (the
+            // cast truncates): a third of the pass otherwise.
+            (q + 0.5) as u16
+        });
         *o = GpuVertex {
             position: [q[0], q[1], q[2], 0],
             normal: encode_normal(*nr),
