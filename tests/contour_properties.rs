@@ -590,7 +590,9 @@ proptest! {
 
 /// Cancellation: a request cancelled before it starts, in the flood, or
 /// in any phase of the sweep returns no mesh at all, and the follower's
-/// next extraction is whole and right.
+/// next extraction is whole and right. Where the flood races the sweep
+/// (limit 5000: past 1250 triangles) a cancel seen by one side only may
+/// let the other finish: then its mesh is whole and right, never partial.
 #[test]
 fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -629,16 +631,86 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
             let r = follower.extract(&tree, &seed, iso, &|| {
                 calls.fetch_add(1, Ordering::Relaxed) + 1 >= stop_at
             });
-            assert_eq!(
-                r.map(|m| m.num_triangles()),
-                Err(flexiso::contour::follow::Cancelled),
-                "limit {limit}, cancelled at call {stop_at} of {asked}"
-            );
+            match r {
+                Ok(m) if limit == 5_000 && stop_at > 1 => {
+                    assert_same_contour(&m, &want, &format!("limit {limit}, raced past a cancel"))
+                }
+                r => assert_eq!(
+                    r.map(|m| m.num_triangles()),
+                    Err(flexiso::contour::follow::Cancelled),
+                    "limit {limit}, cancelled at call {stop_at} of {asked}"
+                ),
+            }
             let again = follower
                 .extract(&tree, &seed, iso, &|| false)
                 .expect("not cancelled");
             assert_same_contour(&again, &want, &format!("limit {limit}, after a cancel"));
         }
+    }
+}
+
+/// The flood raced against the sweep (a contour of unknown size past a
+/// quarter of the serial limit): whichever side wins, and whichever is
+/// slowed (a cancel check that sleeps on the flood's thread or on the
+/// others), the contour is the follower's, whole; the race leaves the
+/// follower sound for the next extraction.
+#[test]
+fn the_flood_raced_against_the_sweep_gives_the_followers_contour() {
+    use std::time::Duration;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    for (dims, seed, t) in [
+        ((40, 36, 30), 7, 0.5),
+        ((24, 50, 20), 11, 0.45),
+        ((30, 30, 30), 3, 0.6),
+    ] {
+        let field = noisy_field(dims, seed);
+        let tree = tree_of(&field);
+        let iso = Isovalue::new(t);
+        let mut oracle = ContourFollower::new(&field);
+        let (seed, want) = (0..tree.arcs().len() as u32)
+            .filter_map(|a| path_seed(&tree, &field, ArcId(a), iso))
+            .map(|s| {
+                let m = oracle.follow(&s, iso);
+                (s, m)
+            })
+            .max_by_key(|(_, m)| m.num_triangles())
+            .expect("a contour");
+        let size = want.num_triangles();
+        assert!(size > 60_000, "{dims:?}: a contour worth racing ({size})");
+        let (mut swept, mut flooded) = (0, 0);
+        // The race starts past a quarter of the limit: the flood gives up
+        // at its limit (just past the contour, or a third short of it).
+        for limit in [size + 1, size * 3 / 4, 4 * size] {
+            let mut follower = ContourFollower::new(&field).with_serial_limit(limit);
+            for slow in [None, Some(true), Some(false)] {
+                let got = pool.install(|| {
+                    let flood = std::thread::current().id();
+                    follower
+                        .extract(&tree, &seed, iso, &|| {
+                            let on_flood = std::thread::current().id() == flood;
+                            if slow == Some(on_flood) {
+                                std::thread::sleep(Duration::from_millis(3));
+                            }
+                            false
+                        })
+                        .expect("not cancelled")
+                });
+                let at = format!("{dims:?} limit {limit} (contour {size}), slowed {slow:?}");
+                assert_same_contour(&got, &want, &at);
+                // The sweep's meshes come with their box.
+                if got.bounds.is_some() {
+                    swept += 1;
+                } else {
+                    flooded += 1;
+                }
+            }
+            let again = follower.follow(&seed, iso);
+            assert_same_contour(&again, &want, "after the race");
+        }
+        eprintln!("{dims:?}: {swept} won by the sweep, {flooded} by the flood");
     }
 }
 

@@ -25,7 +25,11 @@
 //! contours most picks and drags touch, but a head or brain surface of an
 //! MRI holds millions of triangles. [`ContourFollower::extract`] floods
 //! for at most [`serial_limit`] triangles and then hands the contour to
-//! the parallel sweep (`super::sweep`, [`contour_by_sweep`]): every cube
+//! the parallel sweep (`super::sweep`, [`contour_by_sweep`]); past a
+//! quarter of that limit the sweep already runs on the other cores,
+//! raced against the flood (whichever finishes first stops the other, see
+//! `ContourFollower::race`), so the flood's time before it gives up is
+//! not all lost. The sweep: every cube
 //! layer of the volume marched on all cores, each vertex given its side of
 //! the contour by the tree ([`CutSides`](super::seed::CutSides)), so only
 //! this contour's tetrahedra are crossed. The same case tables, edge
@@ -68,7 +72,8 @@ pub const SERIAL_TRIANGLES: usize = 60_000;
 /// `voxels` on `threads` cores: where following and sweeping for a contour
 /// of that size cost the same ([`FOLLOW_NS`]), so a contour of any size
 /// costs at most twice the cheaper way (what it would cost were its size
-/// known). About 410k triangles for colin27 (7.1 M voxels) on 2 cores, 43k
+/// known), or 1.5 times with the sweep raced against the flood past a
+/// quarter of the limit. About 410k triangles for colin27 (7.1 M voxels) on 2 cores, 43k
 /// (raised to [`SERIAL_TRIANGLES`]) on 16.
 pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
@@ -276,9 +281,13 @@ impl<'f> ContourFollower<'f> {
     /// side of this contour by the tree (see `super::sweep`). So the cost
     /// is the flood's for small contours and, for large ones, a pass over
     /// the volume plus the contour's triangles spread over the cores.
+    /// Between a quarter of the limit and the limit the sweep runs beside
+    /// the flood, and the first to finish gives the mesh.
     /// `cancel` is asked every few thousand tetrahedra of the flood,
-    /// between the sweep's phases and before each of its cube layers; it
-    /// must be cheap (an atomic load).
+    /// between the sweep's phases and before each of its planes; it
+    /// must be cheap (an atomic load), and may be asked from any thread.
+    /// A cancel seen by one side of the race while the other finishes
+    /// still gives that whole mesh.
     pub fn extract(
         &mut self,
         tree: &ContourTree,
@@ -315,11 +324,22 @@ impl<'f> ContourFollower<'f> {
             Some(e) if e > limit => None,
             _ => Some(limit),
         };
-        let spare = self.spare.take();
-        if let Some(limit) = flood
-            && let Some(mesh) = self.follow_within(seed, iso, limit, cancel)?
-        {
-            return Ok(mesh);
+        let mut spare = self.spare.take();
+        if let Some(limit) = flood {
+            // Alone while most contours end (no sweep is started for
+            // them), then raced against the sweep up to the limit.
+            let alone = (limit / 4).min(SERIAL_TRIANGLES);
+            let mut out = ContourMesh::empty(seed.arc, iso.value);
+            if self.flood_into(seed, iso, &mut out, false, alone, cancel)? {
+                self.add_normals(&mut out);
+                return Ok(out);
+            }
+            if limit > alone {
+                let spare = spare.take();
+                if let Some(mesh) = self.race(tree, seed, iso, out, limit, spare, cancel)? {
+                    return Ok(mesh);
+                }
+            }
         }
         self.reset();
         let spare = spare.unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value));
@@ -329,6 +349,64 @@ impl<'f> ContourFollower<'f> {
             None => Ok(self
                 .follow_within(seed, iso, usize::MAX, cancel)?
                 .unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value))),
+        }
+    }
+
+    /// The flood that has emitted `out` (more than a quarter of `limit`
+    /// triangles, fewer than `limit`) raced against the parallel sweep for
+    /// the same contour: the flood goes on on this thread while the sweep
+    /// starts on the others; whichever finishes first stops the other at
+    /// its next cancel check, and a flood past `limit` gives its thread
+    /// to the sweep. A contour between the two limits costs the flood's
+    /// time, with a core kept busy beside it; a larger one costs the flood
+    /// up to the limit plus what remains of the sweep, spread over every
+    /// core, where before the sweep started only then: half the flood's
+    /// time saved, so a contour of any size costs at most 1.5 times the
+    /// cheaper way (twice before). None: neither gave the contour (past
+    /// the limit, and the sweep's u32 ids too few), to be followed whole.
+    #[allow(clippy::too_many_arguments)]
+    fn race(
+        &mut self,
+        tree: &ContourTree,
+        seed: &PathSeed,
+        iso: Isovalue,
+        mut out: ContourMesh,
+        limit: usize,
+        spare: Option<ContourMesh>,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<ContourMesh>, Cancelled> {
+        use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+        let field = self.field;
+        let mut scratch = std::mem::take(&mut self.sweep);
+        let spare = spare.unwrap_or_else(|| ContourMesh::empty(seed.arc, iso.value));
+        let (flooded, swept) = (AtomicBool::new(false), AtomicBool::new(false));
+        let (by_flood, by_sweep) = rayon::join(
+            || {
+                let stop = || cancel() || swept.load(Relaxed);
+                let done = self.flood_into(seed, iso, &mut out, true, limit, &stop)?;
+                if done {
+                    flooded.store(true, Relaxed);
+                    self.add_normals(&mut out);
+                }
+                Ok::<_, Cancelled>(done)
+            },
+            || {
+                let stop = || cancel() || flooded.load(Relaxed);
+                let mesh = contour_by_sweep(field, tree, seed, iso, &mut scratch, spare, &stop);
+                if matches!(mesh, Ok(Some(_))) {
+                    swept.store(true, Relaxed);
+                }
+                mesh
+            },
+        );
+        self.sweep = scratch;
+        match (by_flood, by_sweep) {
+            (_, Ok(Some(mesh))) => Ok(Some(mesh)),
+            (Ok(true), _) => Ok(Some(out)),
+            // Past the limit, and too large for the sweep.
+            (Ok(false), Ok(None)) => Ok(None),
+            // Neither finished, nor stopped the other: the caller's cancel.
+            _ => Err(Cancelled),
         }
     }
 
@@ -342,8 +420,28 @@ impl<'f> ContourFollower<'f> {
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<Option<ContourMesh>, Cancelled> {
         let mut out = ContourMesh::empty(seed.arc, iso.value);
+        if !self.flood_into(seed, iso, &mut out, false, limit, cancel)? {
+            return Ok(None);
+        }
+        self.add_normals(&mut out);
+        Ok(Some(out))
+    }
+
+    /// Floods from the seed into `out` (`resume`: on from where the last
+    /// flood into `out` stopped at its limit), false once `out` holds
+    /// more than `limit` triangles (then `out` is partial and the flood
+    /// can resume).
+    fn flood_into(
+        &mut self,
+        seed: &PathSeed,
+        iso: Isovalue,
+        out: &mut ContourMesh,
+        resume: bool,
+        limit: usize,
+        cancel: &(dyn Fn() -> bool + Sync),
+    ) -> Result<bool, Cancelled> {
         if self.dims.iter().any(|&d| d < 2) {
-            return Ok(Some(out));
+            return Ok(true);
         }
         if self.slot.len() != self.field.len() {
             // Zeroed memory: the system hands out pages lazily. (A table of
@@ -354,9 +452,16 @@ impl<'f> ContourFollower<'f> {
         }
         let field = self.field;
         crate::with_values!(field.values(), v => {
-            if !self.flood(v.as_slice(), seed, iso, &mut out, limit, cancel)? {
-                return Ok(None);
-            }
+            self.flood(v.as_slice(), seed, iso, out, resume, limit, cancel)
+        })
+    }
+
+    /// The vertex normals of the flood's whole contour `out`.
+    fn add_normals(&self, out: &mut ContourMesh) {
+        if self.dims.iter().any(|&d| d < 2) {
+            return;
+        }
+        crate::with_values!(self.field.values(), v => {
             out.normals = gradient_normals(
                 v.as_slice(),
                 self.dims,
@@ -366,7 +471,6 @@ impl<'f> ContourFollower<'f> {
                 &out.indices,
             );
         });
-        Ok(Some(out))
     }
 
     /// Forgets the last contour: O(1), but gives back memory when the last
@@ -394,21 +498,30 @@ impl<'f> ContourFollower<'f> {
         })
     }
 
-    /// Floods from the seed into `out`; false when more than `limit`
-    /// triangles came out (then `out` is partial).
+    /// Floods from the seed into `out` (`resume`: on with the tetrahedra
+    /// still waiting); false when more than `limit` triangles came out
+    /// (then `out` is partial, the waiting tetrahedra kept).
+    #[allow(clippy::too_many_arguments)]
     fn flood<T: Scalar>(
         &mut self,
         values: &[T],
         seed: &PathSeed,
         iso: Isovalue,
         out: &mut ContourMesh,
+        resume: bool,
         limit: usize,
         cancel: &(dyn Fn() -> bool + Sync),
     ) -> Result<bool, Cancelled> {
-        self.reset();
-        let Some(mut start) = self.tet_of_edge(seed.below, seed.above) else {
-            return Ok(true);
-        };
+        if !resume {
+            self.reset();
+            let Some(mut start) = self.tet_of_edge(seed.below, seed.above) else {
+                return Ok(true);
+            };
+            let r = record(&mut self.slot, &mut self.records, start.origin);
+            self.records[r].tets |= 1 << start.perm;
+            start.rec = r as u32;
+            self.stack.push(start);
+        }
         let index_limit = limit.saturating_mul(3);
         let mut countdown = CHECK_EVERY;
         let tables = TetTables::get();
@@ -420,15 +533,11 @@ impl<'f> ContourFollower<'f> {
             vertex_edges,
             ..
         } = self;
-        let r = record(slot, records, start.origin);
-        records[r].tets |= 1 << start.perm;
-        start.rec = r as u32;
-        stack.push(start);
         let [nx, ny, nz] = self.dims.map(|d| d as i64 - 1);
         let spacing = self.spacing;
         let sy = self.dims[0] as u32;
         let sz = sy * self.dims[1] as u32;
-        while let Some(t) = stack.pop() {
+        loop {
             countdown -= 1;
             if countdown == 0 {
                 countdown = CHECK_EVERY;
@@ -439,6 +548,9 @@ impl<'f> ContourFollower<'f> {
                     return Ok(false);
                 }
             }
+            let Some(t) = stack.pop() else {
+                break;
+            };
             let corners = CUBE_TETRAHEDRA[t.perm as usize];
             let ids = corners.map(|c| t.origin + corner_offset[c as usize]);
             let vals = ids.map(|v| values[v as usize].to_f64());

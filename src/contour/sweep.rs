@@ -214,6 +214,7 @@ fn sweep<T: Scalar>(
         &mut above,
         &mut cubes,
         &mut active,
+        &|| false,
     );
     drop(above);
 
@@ -442,7 +443,8 @@ const MIXED: u8 = 2;
 /// side of every vertex row (`ALL_BELOW`, `ALL_ABOVE` or `MIXED`), the
 /// cube masks (`cubes`, see [`Sweep::cubes`]) and which cube rows have a
 /// crossed edge at all (`active`, see [`Sweep::active`]). The buffers are
-/// resized to the field, never shrunk.
+/// resized to the field, never shrunk. Once `stop` says so the planes not
+/// begun are skipped (the buffers are then partial: the caller gives up).
 ///
 /// A cube row reads the vertex rows `{y, y + 1} × {z, z + 1}` (clamped to
 /// the box, as the masks' corners are). When those four rows lie wholly on
@@ -456,6 +458,7 @@ fn sides_and_cubes<T: Scalar>(
     above: &mut Vec<u8>,
     cubes: &mut Vec<u8>,
     active: &mut Vec<bool>,
+    stop: &(dyn Fn() -> bool + Sync),
 ) {
     let [nx, ny, _] = dims;
     let plane = nx * ny;
@@ -468,6 +471,9 @@ fn sides_and_cubes<T: Scalar>(
         .zip(sides.par_chunks_mut(ny))
         .enumerate()
         .for_each(|(z, ((a, f), sides))| {
+            if stop() {
+                return;
+            }
             for (y, side) in sides.iter_mut().enumerate() {
                 let first = (plane * z + nx * y) as u32;
                 let (a, f) = (&mut a[nx * y..][..nx], &f[nx * y..][..nx]);
@@ -488,7 +494,11 @@ fn sides_and_cubes<T: Scalar>(
         .par_chunks_mut(plane)
         .zip(active.par_chunks_mut(ny))
         .enumerate()
-        .for_each(|(z, (c, a))| cube_masks(above, &sides, dims, z, c, a));
+        .for_each(|(z, (c, a))| {
+            if !stop() {
+                cube_masks(above, &sides, dims, z, c, a)
+            }
+        });
 }
 
 /// Crossed edges per row of vertices (see [`crossed`]); inactive rows have
@@ -963,7 +973,7 @@ fn sweep_one<T: Scalar>(
         ends,
     } = scratch;
     let side = |v: u32, f: T| sides.is_upper(tree, v, || iso.above_value(f.to_f64(), v));
-    sides_and_cubes(values, dims, side, above, cubes, active);
+    sides_and_cubes(values, dims, side, above, cubes, active, cancel);
     let active: &[bool] = active;
     check()?;
 
@@ -1063,6 +1073,9 @@ fn sweep_one<T: Scalar>(
             );
             let mut bounds = NO_BOUNDS;
             for (z, ((p, g), f)) in planes.clone().zip(p.into_iter().zip(g).zip(f)) {
+                if cancel() {
+                    break;
+                }
                 let rows = &active[ny * z..][..ny];
                 crossed_edges(values, field, cubes, rows, iso, z, p, g, f, ends);
                 // While the plane's positions are in cache.
