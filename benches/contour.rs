@@ -420,16 +420,23 @@ fn scripted_drag(
     let mut old_meshes = std::collections::VecDeque::new();
     let mut old_gpu = std::collections::VecDeque::new();
     // The click that showed the contour, its size unknown (in the
-    // explorer a drag starts from a contour on screen, its size known).
+    // explorer a drag starts from a contour on screen, its size known),
+    // and the spare mesh and GPU form the explorer makes after it, while
+    // the hand has not moved yet, for the first step to write into.
     let t = Instant::now();
+    let mut first_gpu = None;
     let click = flexiso::contour::path_seed_in_chain(tree, field, &chain, iso).map(|seed| {
         let m = parallel
             .extract_expecting(tree, &seed, iso, None, &|| false)
             .expect("not cancelled");
-        black_box(prepare(&m));
-        last = Some(m.num_triangles());
+        old_gpu.push_back(std::sync::Arc::new(prepare(&m)));
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let (v, n) = (m.positions.len(), m.num_triangles());
+        parallel.recycle(flexiso::contour::ContourMesh::spare(m.arc, v, n));
+        first_gpu = Some(flexiso::render::PreparedMesh::spare(v, n));
+        last = Some(n);
         old_meshes.push_back(m);
-        t.elapsed().as_secs_f64() * 1e3
+        ms
     });
     // At an end of the chain the drag turns back, as a hand does.
     let (mut at, mut way, mut turns) = (iso.value, dir, 0);
@@ -473,6 +480,7 @@ fn scripted_drag(
             .then(|| old_gpu.pop_front())
             .flatten()
             .and_then(|g| std::sync::Arc::try_unwrap(g).ok())
+            .or_else(|| first_gpu.take())
             .unwrap_or_default();
         let (p, n, i) = (&m.positions, &m.normals, &m.indices);
         let prepared = std::sync::Arc::new(
@@ -505,6 +513,13 @@ fn scripted_drag(
         old_meshes.push_back(m);
     }
     incremental_drag(name, tree, field, &chain, iso, dir, steps);
+    println!(
+        "{name}: scripted drag, parallel steps in ms: {}",
+        par.iter()
+            .map(|t| format!("{t:.0}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
     let ((sm, sw), (pm, pw)) = (stats(&ser), stats(&par));
     let ((fm, fw), (um, uw)) = (stats(&frames), stats(&upload));
     println!(

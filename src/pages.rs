@@ -51,11 +51,14 @@ pub fn refilled<T: Copy + Send + Sync>(spare: Vec<T>, n: usize, value: T) -> Vec
 
 /// An array of `n` elements for a caller that overwrites every one of
 /// them: `spare` itself when its allocation is large enough (what it held
-/// is left there, and only growth is filled with `value`), else [`filled`].
+/// is left there, and only growth is filled with `value`), else [`filled`]
+/// in an allocation with [`room`] to grow (a mesh's arrays, which a drag
+/// recycles for its next, slightly larger, steps; the room is never
+/// touched, so it costs address space, not memory).
 /// A recycled array costs neither fresh pages nor a fill.
 pub fn reused<T: Copy + Send + Sync>(mut spare: Vec<T>, n: usize, value: T) -> Vec<T> {
     if spare.capacity() < n {
-        let capacity = headroom(spare.capacity(), n);
+        let capacity = room(n);
         drop(spare);
         return filled_within(n, capacity, value);
     }
@@ -101,11 +104,19 @@ pub fn copied<T: Copy + Send + Sync>(mut spare: Vec<T>, from: &[T]) -> Vec<T> {
 /// little with each) fit in it instead of each step faulting in and
 /// zeroing fresh pages; exactly `n` when nothing was recycled.
 pub fn headroom(recycled: usize, n: usize) -> usize {
-    if recycled > 0 {
-        n.saturating_add(n / 4)
-    } else {
-        n
-    }
+    if recycled > 0 { room(n) } else { n }
+}
+
+/// Room for `n` elements and a quarter more (see [`headroom`]).
+pub fn room(n: usize) -> usize {
+    n.saturating_add(n / 4)
+}
+
+/// An array to recycle: room for `n` elements and a quarter more, every
+/// page already touched ([`filled`] to its whole length, so that
+/// [`reused`] writes nothing into it before its caller does).
+pub fn spare<T: Copy + Send + Sync + Default>(n: usize) -> Vec<T> {
+    filled(room(n), T::default())
 }
 
 /// An array written from several threads at once, each slot by one of
@@ -240,7 +251,7 @@ mod tests {
 
     /// Recycled arrays, shorter, longer or as long as asked for, come back
     /// holding exactly what was asked for, in the old allocation when it
-    /// fits.
+    /// fits; a spare holds a quarter more, touched.
     #[test]
     fn recycled_arrays_hold_what_was_asked_for() {
         let big = (HUGE / 4) + 12_345;
@@ -265,21 +276,26 @@ mod tests {
                 if fits && spare_len > 0 {
                     assert_eq!(c.as_ptr(), at, "the old allocation");
                 }
-                // A recycled array too small is replaced by one with room
-                // for the next, slightly larger, steps; a first one is
-                // exact.
+                // A recycled array too small, or none, is replaced by one
+                // with room for the next, slightly larger, steps.
                 let spare: Vec<u32> = vec![9; spare_len];
                 let r = reused(spare, n, 7u32);
                 assert_eq!(r.len(), n);
-                let room = if fits || spare_len == 0 { n } else { n + n / 4 };
+                let room = if fits { n } else { n + n / 4 };
                 assert!(r.capacity() >= room, "{} for {n}", r.capacity());
                 let grown = r.len() + r.len() / 5;
-                if !fits && spare_len > 0 {
+                if !fits {
                     let at = r.as_ptr();
                     let again = reused(r, grown, 7u32);
                     assert_eq!(again.as_ptr(), at, "a fifth more fits");
                 }
             }
         }
+        let s: Vec<u32> = spare(big);
+        assert_eq!(s.len(), big + big / 4);
+        assert!(s.iter().all(|&x| x == 0));
+        let at = s.as_ptr();
+        let r = reused(s, big + big / 5, 7u32);
+        assert_eq!(r.as_ptr(), at, "the spare fits");
     }
 }

@@ -147,6 +147,20 @@ impl ContourMesh {
         }
     }
 
+    /// A mesh of no triangles whose arrays have room for a contour of
+    /// `vertices` and `triangles` and a quarter more, their pages already
+    /// touched: for [`ContourFollower::recycle`] before the first steps of
+    /// a drag, which would otherwise fault in fresh pages (see
+    /// [`crate::pages`]). Its contents are zeros.
+    pub fn spare(arc: ArcId, vertices: usize, triangles: usize) -> Self {
+        Self {
+            positions: crate::pages::spare(vertices),
+            normals: crate::pages::spare(vertices),
+            indices: crate::pages::spare(3 * triangles),
+            ..Self::empty(arc, f64::NAN)
+        }
+    }
+
     /// Number of triangles.
     pub fn num_triangles(&self) -> usize {
         self.indices.len() / 3

@@ -462,6 +462,22 @@ impl Default for PreparedMesh {
     }
 }
 
+impl PreparedMesh {
+    /// A GPU form with room for a mesh of `vertices` and `triangles` and a
+    /// quarter more, its pages already touched, to be reused by
+    /// [`PreparedMesh::new_known`] (see [`crate::contour::ContourMesh::spare`]).
+    pub fn spare(vertices: usize, triangles: usize) -> Self {
+        PreparedMesh {
+            vertices: crate::pages::spare(vertices),
+            indices: Corners::Short {
+                indices: crate::pages::spare(3 * triangles + 1),
+                runs: Vec::new(),
+            },
+            ..Self::default()
+        }
+    }
+}
+
 /// Meshes with fewer vertices than this are prepared on one thread.
 const PARALLEL_VERTICES: usize = 1 << 15;
 

@@ -47,6 +47,18 @@
 //! each kind are held, the one on screen among them: after a drag of the
 //! head, one spare mesh and GPU form (about 190 MB) stay until the
 //! contour is removed.
+//!
+//! **Spares ahead.** A contour too large to keep, extracted afresh (a
+//! click on the head), is handed to the spares like a drag step's, and a
+//! background job then makes one spare mesh and GPU form of its size with
+//! a quarter more room, pages touched ([`ContourMesh::spare`],
+//! [`PreparedMesh::spare`]), while the hand has not moved yet: the first
+//! step of a drag writes into those, the second into the click's. Before,
+//! the first two steps of a drag of the head faulted in fresh pages (290
+//! and 170 ms against 125-140 for the others, `FLEXISO_BENCH_DRAG=1
+//! FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`; fresh pages are
+//! dear on these virtual machines, which hand freed memory back to their
+//! host). The spares of a removed contour go with it.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -116,6 +128,8 @@ struct Spares {
     gpu: VecDeque<Arc<PreparedMesh>>,
     /// Meshes and GPU forms taken out so far.
     taken: usize,
+    /// The contour whose meshes these are (its removal lets them go).
+    owner: Option<ContourId>,
 }
 
 impl Spares {
@@ -135,8 +149,10 @@ impl Spares {
         m
     }
 
-    /// Remembers a mesh just handed out; the oldest beyond [`SPARES`] go.
-    fn hand(&mut self, mesh: &Arc<ContourMesh>, gpu: Option<&Arc<PreparedMesh>>) {
+    /// Remembers a mesh of contour `owner` just handed out; the oldest
+    /// beyond [`SPARES`] go.
+    fn hand(&mut self, owner: ContourId, mesh: &Arc<ContourMesh>, gpu: Option<&Arc<PreparedMesh>>) {
+        self.owner = Some(owner);
         self.meshes.push_back(Arc::clone(mesh));
         self.gpu.extend(gpu.cloned());
         while self.meshes.len() > SPARES {
@@ -157,14 +173,28 @@ struct Kept {
 }
 
 /// An extraction's value: the request, the mesh, its GPU form, ms, and
-/// what to keep ahead for a drag when it was extracted afresh.
+/// what to make ahead for a drag when it was extracted afresh.
 type Extracted = (
     u64,
     Option<Arc<ContourMesh>>,
     Option<Arc<PreparedMesh>>,
     f64,
-    Option<KeepAhead>,
+    Option<Ahead>,
 );
+
+/// What a contour just extracted afresh (a click) gets ready, in the
+/// background, for a drag that may follow (see the module documentation).
+enum Ahead {
+    /// At most [`KEPT_TRIANGLES`]: the contour kept at its isovalue.
+    Keep(KeepAhead),
+    /// Larger: a spare mesh and GPU form of its size, pages touched, for
+    /// the first drag step to write into.
+    Spares {
+        arc: ArcId,
+        vertices: usize,
+        triangles: usize,
+    },
+}
 
 /// A contour to keep for dragging at the isovalue it was just extracted
 /// at (see the module documentation).
@@ -195,9 +225,11 @@ pub struct Extractions {
     kept: Arc<Mutex<Option<Kept>>>,
     /// Its last meshes, whose arrays its next steps reuse.
     spares: Arc<Mutex<Spares>>,
-    /// Keeps the contour last extracted afresh (see the module
-    /// documentation); it tells no one when done.
+    /// Keeps the contour last extracted afresh, or makes spares for it
+    /// (see the module documentation); it tells no one when done.
     keep_ahead: Job<()>,
+    /// [`KEPT_TRIANGLES`] (smaller in tests).
+    kept_triangles: usize,
 }
 
 impl std::fmt::Debug for Extractions {
@@ -220,6 +252,7 @@ impl Extractions {
             kept: Arc::default(),
             spares: Arc::default(),
             keep_ahead: Job::new(None),
+            kept_triangles: KEPT_TRIANGLES,
         }
     }
 
@@ -247,6 +280,7 @@ impl Extractions {
         newest.store(request, Ordering::Relaxed);
         let sizes = Arc::clone(&self.sizes);
         let kept = Arc::clone(&self.kept);
+        let kept_triangles = self.kept_triangles;
         let spares = Arc::clone(&self.spares);
         self.extract
             .entry(id)
@@ -259,6 +293,8 @@ impl Extractions {
                     .and_then(|mut p| p.pop())
                     .unwrap_or_default();
                 let mut expected = sizes.lock().ok().and_then(|m| m.get(&id).copied());
+                // A click: the contour's size unknown until now.
+                let click = expected.is_none();
                 // Superseded: a newer request for this contour is queued.
                 let cancel = || newest.load(Ordering::Relaxed) != request;
                 let (mesh, afresh, recycled) = match drag_step(
@@ -270,13 +306,14 @@ impl Extractions {
                     superarc,
                     h,
                     &mut expected,
+                    kept_triangles,
                     &cancel,
                 ) {
                     Some(mesh) => (mesh, false, true),
                     None => {
                         // A drag step of a contour too large to keep: into
                         // a spare's arrays, as a kept contour's step.
-                        let large = expected.is_some_and(|e| e > KEPT_TRIANGLES);
+                        let large = expected.is_some_and(|e| e > kept_triangles);
                         let spare = large
                             .then(|| spares.lock().ok().and_then(|mut s| s.mesh()))
                             .flatten();
@@ -304,28 +341,36 @@ impl Extractions {
                 }
                 let mesh = mesh.map(Arc::new);
                 let ms = t.elapsed().as_secs_f64() * 1e3;
+                // A contour too large to keep is dragged through the
+                // spares: its click's mesh among them.
+                let large = |m: &ContourMesh| m.num_triangles() > kept_triangles;
                 let gpu = match &mesh {
-                    Some(m) if recycled => {
+                    Some(m) if recycled || large(m) => {
                         let spare = spares.lock().ok().and_then(|mut s| s.gpu());
                         let gpu = prepare_reusing(m, spare.unwrap_or_default());
                         if let Ok(mut s) = spares.lock() {
-                            s.hand(m, gpu.as_ref());
+                            s.hand(id, m, gpu.as_ref());
                         }
                         gpu
                     }
                     _ => mesh.as_deref().and_then(prepare),
                 };
-                let ahead = (afresh
-                    && mesh
-                        .as_deref()
-                        .is_some_and(|m| m.num_triangles() <= KEPT_TRIANGLES)
-                    && field.len() <= KEPT_VOLUME)
-                    .then_some(KeepAhead {
-                        field,
-                        tree,
-                        superarc,
-                        h,
-                    });
+                let ahead = match mesh.as_deref() {
+                    Some(m) if click && large(m) => Some(Ahead::Spares {
+                        arc: superarc,
+                        vertices: m.positions.len(),
+                        triangles: m.num_triangles(),
+                    }),
+                    Some(m) if afresh && !large(m) && field.len() <= KEPT_VOLUME => {
+                        Some(Ahead::Keep(KeepAhead {
+                            field,
+                            tree,
+                            superarc,
+                            h,
+                        }))
+                    }
+                    _ => None,
+                };
                 Ok((request, mesh, gpu, ms, ahead))
             });
     }
@@ -334,6 +379,7 @@ impl Extractions {
     /// background, unless a newer request or its removal comes first.
     fn keep_ahead(&mut self, id: ContourId, request: u64, ahead: KeepAhead) {
         let kept = Arc::clone(&self.kept);
+        let kept_triangles = self.kept_triangles;
         let Some(newest) = self.newest.get(&id).map(Arc::clone) else {
             return;
         };
@@ -351,7 +397,7 @@ impl Extractions {
             };
             // Its mesh is the one just extracted: only the state is made.
             if let Ok(Some(contour)) =
-                DraggedContour::keep(&field, &seed, iso, KEPT_TRIANGLES, &stale)
+                DraggedContour::keep(&field, &seed, iso, kept_triangles, &stale)
                 && let Ok(mut slot) = kept.lock()
                 // Asked under the lock: `forget` cancels, then empties the
                 // slot under it, so a removed contour is never left kept.
@@ -363,6 +409,30 @@ impl Extractions {
         });
     }
 
+    /// Makes a spare mesh and GPU form for the first drag step of contour
+    /// `id`, a contour too large to keep (see the module documentation),
+    /// in the background unless it is removed first. Offered even when a
+    /// drag has begun meanwhile: a later step writes into it.
+    fn spares_ahead(&mut self, id: ContourId, arc: ArcId, vertices: usize, triangles: usize) {
+        let spares = Arc::clone(&self.spares);
+        self.keep_ahead
+            .start("spares for dragging", move |progress| {
+                let mesh = Arc::new(ContourMesh::spare(arc, vertices, triangles));
+                if progress.is_cancelled() {
+                    return Ok(());
+                }
+                let gpu = Arc::new(PreparedMesh::spare(vertices, triangles));
+                if let Ok(mut s) = spares.lock()
+                // Asked under the lock: `forget` cancels, then empties the
+                // spares under it.
+                && !progress.is_cancelled()
+                {
+                    s.hand(id, &mesh, Some(&gpu));
+                }
+                Ok(())
+            });
+    }
+
     /// Forgets contour `id` (removed): its late answers are dropped.
     pub fn forget(&mut self, id: ContourId) {
         self.keep_ahead.cancel();
@@ -370,9 +440,11 @@ impl Extractions {
             && k.as_ref().is_some_and(|k| k.id == id)
         {
             *k = None;
-            if let Ok(mut s) = self.spares.lock() {
-                *s = Spares::default();
-            }
+        }
+        if let Ok(mut s) = self.spares.lock()
+            && s.owner == Some(id)
+        {
+            *s = Spares::default();
         }
         self.extract.remove(&id);
         self.measure.remove(&id);
@@ -422,7 +494,14 @@ impl Extractions {
             }
         }
         for (id, request, k) in ahead {
-            self.keep_ahead(id, request, k);
+            match k {
+                Ahead::Keep(k) => self.keep_ahead(id, request, k),
+                Ahead::Spares {
+                    arc,
+                    vertices,
+                    triangles,
+                } => self.spares_ahead(id, arc, vertices, triangles),
+            }
         }
         for (&id, job) in &mut self.measure {
             if let Some(Ok((request, topology))) = job.poll_take() {
@@ -498,9 +577,10 @@ fn drag_step(
     superarc: ArcId,
     h: f64,
     expected: &mut Option<usize>,
+    kept_triangles: usize,
     cancel: &(dyn Fn() -> bool + Sync),
 ) -> Option<Result<Option<ContourMesh>, Cancelled>> {
-    let small = expected.is_some_and(|n| n <= KEPT_TRIANGLES) && field.len() <= KEPT_VOLUME;
+    let small = expected.is_some_and(|n| n <= kept_triangles) && field.len() <= KEPT_VOLUME;
     // Taken out while it moves (the lock is not held meanwhile: other
     // contours' jobs look at it too); another contour's is left alone.
     let ours = kept.lock().ok().and_then(|mut slot| {
@@ -544,7 +624,7 @@ fn drag_step(
     // A jump to a contour too large to keep (the head, from a structure
     // inside it) gives up after about a million tetrahedra and is
     // extracted afresh, instead of flooding and keeping all of it.
-    match DraggedContour::start_within(field, &seed, iso, KEPT_TRIANGLES, cancel) {
+    match DraggedContour::start_within(field, &seed, iso, kept_triangles, cancel) {
         Ok(Some((contour, mesh))) => {
             keep(Kept {
                 id,
@@ -556,7 +636,7 @@ fn drag_step(
         Ok(None) => {
             // Given up past the limit (or no contour to keep): at least
             // that large, which sends it to the sweep sooner.
-            *expected = expected.map(|n| n.max(KEPT_TRIANGLES + 1));
+            *expected = expected.map(|n| n.max(kept_triangles + 1));
             None
         }
         Err(c) => Some(Err(c)),
@@ -679,6 +759,93 @@ mod tests {
         jobs.forget(id);
         assert!(jobs.kept.lock().expect("not poisoned").is_none());
         assert!(jobs.spares.lock().expect("not poisoned").meshes.is_empty());
+    }
+
+    /// A contour too large to keep (the limit lowered to 10 triangles):
+    /// after the click its mesh and a spare made ahead, with room, wait in
+    /// the spares; the first drag step takes the spare (the click's mesh
+    /// is on screen), every step gives the mesh extracted afresh and
+    /// nothing is kept, and removing the contour lets the spares go.
+    #[test]
+    fn a_contour_too_large_to_keep_is_dragged_through_spares_made_ahead() {
+        let field = Arc::new(Synthetic::cube(24).generate());
+        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
+        let tree = Arc::new(tree);
+        let (arc, lo, hi) = (0..tree.arcs().len() as u32)
+            .map(|a| {
+                let e = tree.arc(ArcId(a));
+                let value = |n| field.value(tree.node(n).vertex);
+                (ArcId(a), value(e.lower), value(e.upper))
+            })
+            .max_by(|x, y| (x.2 - x.1).total_cmp(&(y.2 - y.1)))
+            .expect("arcs");
+        let mut jobs = Extractions::new(None);
+        jobs.kept_triangles = 10;
+        let id = ContourId(5);
+        // What the window shows: the newest mesh.
+        let mut shown: Option<Arc<ContourMesh>> = None;
+        let mut click = None;
+        for k in 0..4u64 {
+            let h = lo + (hi - lo) * (0.3 + 0.1 * k as f64);
+            jobs.request(id, k + 1, &field, &tree, arc, h);
+            while jobs.wait_one() {
+                for d in jobs.poll() {
+                    if let Done::Mesh {
+                        request, mesh: m, ..
+                    } = d
+                        && request == k + 1
+                    {
+                        shown = Some(m.expect("the arc spans h"));
+                    }
+                }
+            }
+            let mesh = shown.as_ref().expect("the request answered");
+            let fresh = extract_mesh(
+                &field,
+                &tree,
+                arc,
+                h,
+                &mut FollowerScratch::default(),
+                None,
+                None,
+                &|| false,
+            )
+            .expect("not cancelled")
+            .expect("the arc spans h");
+            assert!(fresh.num_triangles() > 10);
+            assert_eq!(mesh.triangle_soup(), fresh.triangle_soup(), "step {k}");
+            assert!(
+                jobs.kept.lock().expect("not poisoned").is_none(),
+                "step {k}"
+            );
+            let spares = jobs.spares.lock().expect("not poisoned");
+            assert_eq!(spares.owner, Some(id));
+            let room = |m: &ContourMesh| m.positions.len() >= fresh.positions.len() * 5 / 4;
+            if k == 0 {
+                // The click's mesh, then the spare made ahead.
+                assert_eq!(spares.meshes.len(), 2);
+                assert!(Arc::ptr_eq(&spares.meshes[0], mesh));
+                assert!(room(&spares.meshes[1]));
+                assert!(spares.meshes[1].indices.len() >= 3 * fresh.num_triangles() * 5 / 4);
+                assert_eq!(spares.gpu.len(), 2);
+                assert_eq!(spares.taken, 0);
+                click = Some(Arc::clone(mesh));
+            } else {
+                // Spares taken: the one made ahead by the first step,
+                // while the click's mesh was on screen.
+                assert!(
+                    spares.taken >= 2 * k as usize - 1,
+                    "step {k}: {}",
+                    spares.taken
+                );
+                if let Some(click) = click.take() {
+                    assert!(Arc::ptr_eq(&spares.meshes[0], &click), "the click's left");
+                }
+            }
+        }
+        jobs.forget(id);
+        let spares = jobs.spares.lock().expect("not poisoned");
+        assert!(spares.meshes.is_empty() && spares.gpu.is_empty());
     }
 
     /// A contour removed while it is being kept ahead, or asked for again
