@@ -650,7 +650,8 @@ fn cancelled_extraction_returns_nothing_and_leaves_the_follower_sound() {
 }
 
 /// The flood raced against the sweep (a contour of unknown size past a
-/// quarter of the serial limit): whichever side wins, and whichever is
+/// quarter of the serial limit, no other extraction running, or always):
+/// whichever side wins, and whichever is
 /// slowed (a cancel check that sleeps on the flood's thread or on the
 /// others), the contour is the follower's, whole; the race leaves the
 /// follower sound for the next extraction.
@@ -683,8 +684,18 @@ fn the_flood_raced_against_the_sweep_gives_the_followers_contour() {
         let (mut swept, mut flooded) = (0, 0);
         // The race starts past a quarter of the limit: the flood gives up
         // at its limit (just past the contour, or a third short of it).
-        for limit in [size + 1, size * 3 / 4, 4 * size] {
-            let mut follower = ContourFollower::new(&field).with_serial_limit(limit);
+        // Raced always, or only when no other extraction runs (the
+        // default: the tests beside this one make it either way).
+        for (limit, always) in [size + 1, size * 3 / 4, 4 * size]
+            .into_iter()
+            .flat_map(|l| [(l, true), (l, false)])
+        {
+            let follower = ContourFollower::new(&field).with_serial_limit(limit);
+            let mut follower = if always {
+                follower.racing_always()
+            } else {
+                follower
+            };
             for slow in [None, Some(true), Some(false)] {
                 let got = pool.install(|| {
                     let flood = std::thread::current().id();

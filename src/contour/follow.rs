@@ -98,6 +98,29 @@ const SWEEP_VOXEL_NS: f64 = 11.0;
 /// See [`FOLLOW_NS`].
 const SWEEP_TRIANGLE_NS: f64 = 41.0;
 
+/// Extractions ([`ContourFollower::extract_expecting`]) running in this
+/// process: the flood races the sweep only when it runs alone, since the
+/// race spends cores on work that may be thrown away (the first screen's
+/// six contours, extracted at once, would each start a sweep).
+static RUNNING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Counts one extraction in [`RUNNING`] while it lives.
+struct Running;
+
+impl Running {
+    /// Counted in; true when no other extraction runs.
+    fn enter() -> (Self, bool) {
+        let before = RUNNING.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        (Running, before == 0)
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        RUNNING.fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
 /// Tetrahedra the flood visits between two cancel checks.
 const CHECK_EVERY: u32 = 1 << 14;
 
@@ -151,6 +174,9 @@ pub struct ContourFollower<'f> {
     /// Triangles the serial flood of [`ContourFollower::extract`] may
     /// emit; None: [`serial_limit`] of the field and the thread pool.
     serial_limit: Option<usize>,
+    /// Race the flood against the sweep even while other extractions run
+    /// (see [`RUNNING`]; for tests).
+    race_always: bool,
 }
 
 /// The record of vertex `v`, created if the flood has not touched `v` yet.
@@ -244,6 +270,7 @@ impl<'f> ContourFollower<'f> {
             sweep: SweepScratch::default(),
             spare: None,
             serial_limit: None,
+            race_always: false,
         }
     }
 
@@ -254,6 +281,14 @@ impl<'f> ContourFollower<'f> {
     /// tests and benchmarks).
     pub fn with_serial_limit(mut self, triangles: usize) -> Self {
         self.serial_limit = Some(triangles);
+        self
+    }
+
+    /// Races the flood against the sweep (see `ContourFollower::race`)
+    /// even while other extractions run in this process, where by default
+    /// it races only when alone (for tests, which run side by side).
+    pub fn racing_always(mut self) -> Self {
+        self.race_always = true;
         self
     }
 
@@ -325,20 +360,25 @@ impl<'f> ContourFollower<'f> {
             _ => Some(limit),
         };
         let mut spare = self.spare.take();
+        let (_running, only) = Running::enter();
         if let Some(limit) = flood {
             // Alone while most contours end (no sweep is started for
-            // them), then raced against the sweep up to the limit.
-            let alone = (limit / 4).min(SERIAL_TRIANGLES);
+            // them), then raced against the sweep up to the limit when no
+            // other extraction needs the cores.
+            let before_race = (limit / 4).min(SERIAL_TRIANGLES);
             let mut out = ContourMesh::empty(seed.arc, iso.value);
-            if self.flood_into(seed, iso, &mut out, false, alone, cancel)? {
+            if self.flood_into(seed, iso, &mut out, false, before_race, cancel)? {
                 self.add_normals(&mut out);
                 return Ok(out);
             }
-            if limit > alone {
+            if limit > before_race && (only || self.race_always) {
                 let spare = spare.take();
                 if let Some(mesh) = self.race(tree, seed, iso, out, limit, spare, cancel)? {
                     return Ok(mesh);
                 }
+            } else if self.flood_into(seed, iso, &mut out, true, limit, cancel)? {
+                self.add_normals(&mut out);
+                return Ok(out);
             }
         }
         self.reset();
