@@ -677,16 +677,13 @@ mod tests {
     use crate::field::synthetic::Synthetic;
     use crate::progress::Progress;
 
-    /// Requests along an arc, as a drag makes them: the first (its size
-    /// unknown) is extracted afresh and then kept ahead at its isovalue,
-    /// every later one is answered by the contour kept for dragging; each
-    /// gives the mesh extracted afresh (the same oriented triangles on the
-    /// same vertices), and forgetting the contour lets the kept one go.
-    #[test]
-    fn a_dragged_contour_is_kept_and_gives_the_mesh_extracted_afresh() {
+    type Scene = (Arc<ScalarField>, Arc<ContourTree>, ArcId, f64, f64);
+
+    /// The synthetic cube of side 24, its tree, and its arc spanning the
+    /// widest range of values with that range's ends.
+    fn cube_and_its_longest_arc() -> Scene {
         let field = Arc::new(Synthetic::cube(24).generate());
         let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
-        let tree = Arc::new(tree);
         let (arc, lo, hi) = (0..tree.arcs().len() as u32)
             .map(|a| {
                 let e = tree.arc(ArcId(a));
@@ -695,6 +692,25 @@ mod tests {
             })
             .max_by(|x, y| (x.2 - x.1).total_cmp(&(y.2 - y.1)))
             .expect("arcs");
+        (field, Arc::new(tree), arc, lo, hi)
+    }
+
+    /// The contour of `arc` at `h` extracted afresh, with nothing kept.
+    fn afresh(field: &ScalarField, tree: &ContourTree, arc: ArcId, h: f64) -> ContourMesh {
+        let mut scratch = FollowerScratch::default();
+        extract_mesh(field, tree, arc, h, &mut scratch, None, None, &|| false)
+            .expect("not cancelled")
+            .expect("the arc spans h")
+    }
+
+    /// Requests along an arc, as a drag makes them: the first (its size
+    /// unknown) is extracted afresh and then kept ahead at its isovalue,
+    /// every later one is answered by the contour kept for dragging; each
+    /// gives the mesh extracted afresh (the same oriented triangles on the
+    /// same vertices), and forgetting the contour lets the kept one go.
+    #[test]
+    fn a_dragged_contour_is_kept_and_gives_the_mesh_extracted_afresh() {
+        let (field, tree, arc, lo, hi) = cube_and_its_longest_arc();
         let mut jobs = Extractions::new(None);
         let id = ContourId(7);
         let steps = 6u64;
@@ -716,18 +732,7 @@ mod tests {
                 }
             }
             let mesh = mesh.expect("the request answered");
-            let fresh = extract_mesh(
-                &field,
-                &tree,
-                arc,
-                h,
-                &mut FollowerScratch::default(),
-                None,
-                None,
-                &|| false,
-            )
-            .expect("not cancelled")
-            .expect("the arc spans h");
+            let fresh = afresh(&field, &tree, arc, h);
             assert!(fresh.num_triangles() > 0);
             assert_eq!(
                 mesh.triangle_soup(),
@@ -768,17 +773,7 @@ mod tests {
     /// nothing is kept, and removing the contour lets the spares go.
     #[test]
     fn a_contour_too_large_to_keep_is_dragged_through_spares_made_ahead() {
-        let field = Arc::new(Synthetic::cube(24).generate());
-        let (tree, _) = ContourTree::from_field(&field, &Progress::new()).expect("not cancelled");
-        let tree = Arc::new(tree);
-        let (arc, lo, hi) = (0..tree.arcs().len() as u32)
-            .map(|a| {
-                let e = tree.arc(ArcId(a));
-                let value = |n| field.value(tree.node(n).vertex);
-                (ArcId(a), value(e.lower), value(e.upper))
-            })
-            .max_by(|x, y| (x.2 - x.1).total_cmp(&(y.2 - y.1)))
-            .expect("arcs");
+        let (field, tree, arc, lo, hi) = cube_and_its_longest_arc();
         let mut jobs = Extractions::new(None);
         jobs.kept_triangles = 10;
         let id = ContourId(5);
@@ -800,18 +795,7 @@ mod tests {
                 }
             }
             let mesh = shown.as_ref().expect("the request answered");
-            let fresh = extract_mesh(
-                &field,
-                &tree,
-                arc,
-                h,
-                &mut FollowerScratch::default(),
-                None,
-                None,
-                &|| false,
-            )
-            .expect("not cancelled")
-            .expect("the arc spans h");
+            let fresh = afresh(&field, &tree, arc, h);
             assert!(fresh.num_triangles() > 10);
             assert_eq!(mesh.triangle_soup(), fresh.triangle_soup(), "step {k}");
             assert!(
