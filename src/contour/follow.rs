@@ -73,8 +73,8 @@ pub const SERIAL_TRIANGLES: usize = 60_000;
 /// of that size cost the same ([`FOLLOW_NS`]), so a contour of any size
 /// costs at most twice the cheaper way (what it would cost were its size
 /// known), or 1.5 times with the sweep raced against the flood past a
-/// quarter of the limit. About 410k triangles for colin27 (7.1 M voxels) on 2 cores, 43k
-/// (raised to [`SERIAL_TRIANGLES`]) on 16.
+/// quarter of the limit. About 235k triangles for colin27 (7.1 M voxels)
+/// on 2 cores, 22k (raised to [`SERIAL_TRIANGLES`]) on 16.
 pub fn serial_limit(voxels: usize, threads: usize) -> usize {
     if threads < 2 {
         return usize::MAX;
@@ -85,18 +85,20 @@ pub fn serial_limit(voxels: usize, threads: usize) -> usize {
 }
 
 /// What following a contour and sweeping for it cost, in nanoseconds of
-/// CPU. Measured on colin27_ch2 (2026-12-05, release, 2 threads,
-/// `FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`): following costs
-/// 95-130 ns per triangle on one thread; the sweep, which marches the
-/// contour alone (its vertices' sides from the tree), about 11 ns per
-/// voxel plus 41 ns per triangle of the contour, spread over the cores
-/// (the head's 5.4 M triangles in 149-169 ms of wall time, an
-/// 854k-triangle contour in 53-61 ms).
-const FOLLOW_NS: f64 = 115.0;
+/// CPU. Measured on colin27_ch2 (2026-12-05, session 24, release, 2
+/// threads, `FLEXISO_BENCH_QUICK=1 cargo bench --bench contour`, steps of
+/// a 156k- and an 854k-triangle contour, their preparation taken off):
+/// following costs 109-113 ns per triangle on one thread; the sweep, which
+/// marches the contour alone (its vertices' sides from the tree), about
+/// 5.3 ns per voxel plus 62 ns per triangle of the contour, spread over the
+/// cores (23.5 ms of wall time at 156k triangles, 45 ms at 854k). Until
+/// then 115, 11 and 41 (session 22's sweep, before its passes moved fewer
+/// bytes): a limit of 410k triangles on colin27 where these give 235k.
+const FOLLOW_NS: f64 = 111.0;
 /// See [`FOLLOW_NS`].
-const SWEEP_VOXEL_NS: f64 = 11.0;
+const SWEEP_VOXEL_NS: f64 = 5.3;
 /// See [`FOLLOW_NS`].
-const SWEEP_TRIANGLE_NS: f64 = 41.0;
+const SWEEP_TRIANGLE_NS: f64 = 62.0;
 
 /// Extractions ([`ContourFollower::extract_expecting`]) running in this
 /// process: the flood races the sweep only when it runs alone, since the
