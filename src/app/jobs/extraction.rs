@@ -695,6 +695,26 @@ mod tests {
         (field, Arc::new(tree), arc, lo, hi)
     }
 
+    /// The mesh answering request `request`, once every job (extraction,
+    /// measurement, keeping ahead) is done.
+    fn answer(jobs: &mut Extractions, request: u64) -> Arc<ContourMesh> {
+        let mut mesh = None;
+        while jobs.wait_one() {
+            for d in jobs.poll() {
+                if let Done::Mesh {
+                    request: r,
+                    mesh: m,
+                    ..
+                } = d
+                    && r == request
+                {
+                    mesh = Some(m.expect("the arc spans h"));
+                }
+            }
+        }
+        mesh.expect("the request answered")
+    }
+
     /// The contour of `arc` at `h` extracted afresh, with nothing kept.
     fn afresh(field: &ScalarField, tree: &ContourTree, arc: ArcId, h: f64) -> ContourMesh {
         let mut scratch = FollowerScratch::default();
@@ -717,21 +737,7 @@ mod tests {
         for k in 0..steps {
             let h = lo + (hi - lo) * (0.3 + 0.4 * k as f64 / steps as f64);
             jobs.request(id, k + 1, &field, &tree, arc, h);
-            let mut mesh = None;
-            // Until every job (extraction, measurement, keeping ahead) is
-            // done.
-            while jobs.wait_one() {
-                for d in jobs.poll() {
-                    if let Done::Mesh {
-                        request, mesh: m, ..
-                    } = d
-                        && request == k + 1
-                    {
-                        mesh = Some(m.expect("the arc spans h"));
-                    }
-                }
-            }
-            let mesh = mesh.expect("the request answered");
+            let mesh = answer(&mut jobs, k + 1);
             let fresh = afresh(&field, &tree, arc, h);
             assert!(fresh.num_triangles() > 0);
             assert_eq!(
@@ -783,18 +789,7 @@ mod tests {
         for k in 0..4u64 {
             let h = lo + (hi - lo) * (0.3 + 0.1 * k as f64);
             jobs.request(id, k + 1, &field, &tree, arc, h);
-            while jobs.wait_one() {
-                for d in jobs.poll() {
-                    if let Done::Mesh {
-                        request, mesh: m, ..
-                    } = d
-                        && request == k + 1
-                    {
-                        shown = Some(m.expect("the arc spans h"));
-                    }
-                }
-            }
-            let mesh = shown.as_ref().expect("the request answered");
+            let mesh = shown.insert(answer(&mut jobs, k + 1));
             let fresh = afresh(&field, &tree, arc, h);
             assert!(fresh.num_triangles() > 10);
             assert_eq!(mesh.triangle_soup(), fresh.triangle_soup(), "step {k}");
