@@ -130,7 +130,9 @@ fn quick() {
         let (iso, seed, triangles) = largest_contour(&tree, &field);
         if std::env::var("FLEXISO_BENCH_DRAG").as_deref() == Ok("1") {
             // Only the scripted drags (for profiling).
-            scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
+            // Upwards: the head's outer surface shrinks towards the skull.
+            scripted_drag(&name, &tree, &field, iso, seed.arc, 1.0, 20);
+            drag_latency(&name, &tree, &field, 250_000..=500_000);
             drag_latency(&name, &tree, &field, 500_000..=1_000_000);
             continue;
         }
@@ -173,7 +175,7 @@ fn quick() {
             t_followed
         );
         serial_vs_parallel(&name, &tree, &field, iso, &seed);
-        scripted_drag(&name, &tree, &field, iso, seed.arc, 20);
+        scripted_drag(&name, &tree, &field, iso, seed.arc, 1.0, 20);
         drag_while_measuring(&name, &tree, &field, iso, &seed);
         drag_latency(&name, &tree, &field, 150_000..=250_000);
         drag_latency(&name, &tree, &field, 500_000..=1_000_000);
@@ -400,13 +402,12 @@ fn scripted_drag(
     field: &ScalarField,
     iso: Isovalue,
     arc: flexiso::tree::ArcId,
+    dir: f64,
     steps: usize,
 ) {
-    // Upwards: the head's outer surface shrinks towards the skull. The
-    // marker moves along the arc's chain at a simplification level of 100
-    // arcs (by volume), as in the explorer: past the tree's many small
-    // nodes the contour stays the head's.
-    let dir = 1.0;
+    // The marker moves along the arc's chain at a simplification level of
+    // 100 arcs (by volume), as in the explorer: past the tree's many small
+    // nodes the contour stays the same structure's.
     let start = arc;
     let chain = chain_at_100_arcs(tree, field, arc);
     let gpu = flexiso::render::headless::Gpu::new().ok();
@@ -790,7 +791,23 @@ fn drag_latency(
         field.value(tree.node(tree.arc(chain[chain.len() - 1]).upper).vertex),
     );
     let dir = if h - ends.0 > ends.1 - h { -1.0 } else { 1.0 };
-    incremental_drag(name, tree, field, &chain, Isovalue::new(h), dir, 20);
+    // The same drag kept and extracted afresh on every core: the explorer
+    // keeps contours of up to `kept_limit` triangles.
+    scripted_drag(name, tree, field, Isovalue::new(h), arc, dir, 20);
+    let kept = flexiso::contour::drag::kept_limit(
+        field.len(),
+        rayon::current_num_threads(),
+        flexiso::app::jobs::extraction::KEPT_TRIANGLES,
+    );
+    println!(
+        "{name}: the explorer drags a contour of {} triangles {} (kept up to {kept} triangles here)",
+        worst.3,
+        if worst.3 <= kept {
+            "kept"
+        } else {
+            "afresh (the scripted drag's parallel steps)"
+        }
+    );
     println!(
         "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
          the click (size unknown) {:.1} ms + upload {:.1} ms; \

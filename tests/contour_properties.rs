@@ -931,3 +931,21 @@ fn drags_cross_nodes_on_random_grids() {
     assert!(steps > 300, "{steps} steps taken");
     assert!(across > 50, "{across} drags left their first arc");
 }
+
+/// The explorer keeps a contour for dragging only where a kept step beat
+/// the parallel sweep in the measurements the limit is fitted to
+/// (colin27_ch2, 2 cores: kept faster at 229k-326k triangles, the sweep at
+/// 802k-881k), fewer on more cores (the kept step is partly serial), the
+/// cap on one core (no sweep there) and on large volumes.
+#[test]
+fn a_contour_is_kept_for_dragging_only_where_its_steps_beat_the_sweep() {
+    use flexiso::contour::drag::kept_limit;
+    let colin = 181 * 217 * 181;
+    let cap = 1_000_000;
+    let two = kept_limit(colin, 2, cap);
+    assert!((326_000..802_000).contains(&two), "{two}");
+    assert!(kept_limit(colin, 16, cap) < two / 4);
+    assert_eq!(kept_limit(colin, 1, cap), cap);
+    assert_eq!(kept_limit(8 * colin, 2, cap), cap);
+    assert!(kept_limit(colin / 8, 2, cap) <= two / 8 + 1);
+}

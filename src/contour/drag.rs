@@ -65,10 +65,11 @@
 //! triangles and 12 on the head): steps 49-51 -> 51-55 ms at 854k and
 //! 466 -> 500 ms on the head, and the start 1159 -> 1825 ms; the flood's
 //! depth-first order is already local, so it was left out. The explorer
-//! drags by a kept contour only contours of up to 1 M triangles (`app::jobs::extraction`, where
-//! the limit's measurements are: 7 ms a step at 156k triangles, 65 ms at
-//! 854k, about the sweep's at 1.4-1.8 M), and extracts larger ones afresh
-//! by [`super::ContourFollower::extract`]. It starts one in the
+//! drags by a kept contour only contours small enough that a kept step
+//! beats extracting afresh on every core ([`kept_limit`]: about 460k
+//! triangles on colin27 with 2 cores, never more than 1 M; see
+//! `app::jobs::extraction` for the measurements), and extracts larger
+//! ones afresh by [`super::ContourFollower::extract`]. It starts one in the
 //! background as soon as such a contour has been extracted afresh (a
 //! click), so that a drag's first step is a step too.
 //!
@@ -100,6 +101,49 @@ use strength_reduce::StrengthReducedU32;
 pub fn step_budget(triangles: usize) -> usize {
     (triangles / 2).max(4096)
 }
+
+/// The largest contour worth dragging by a kept [`DraggedContour`] in a
+/// volume of `voxels` on `threads` cores: where a kept step and a step
+/// extracted afresh by the parallel sweep cost the same (new isovalue to
+/// mesh ready for upload, their arrays recycled as the explorer does), at
+/// most `cap` (the kept state's memory: about 65 bytes per triangle).
+/// A kept step costs what changed plus passes over the whole contour
+/// (every vertex moves), partly serial ([`KEPT_NS`]); the sweep a pass
+/// over the volume plus the contour's triangles, on every core
+/// ([`AFRESH_VOXEL_NS`]). About 460k triangles on colin27 (7.1 M voxels)
+/// on 2 cores, 65k on 16; on one core the sweep is not used (the
+/// follower floods), and `cap` holds.
+pub fn kept_limit(voxels: usize, threads: usize, cap: usize) -> usize {
+    if threads < 2 {
+        return cap;
+    }
+    let p = threads as f64;
+    // K t (s + (1 - s) / p) = (V v + A t) / p, solved for t.
+    let kept = KEPT_NS * (KEPT_SERIAL * p + 1.0 - KEPT_SERIAL) - AFRESH_TRIANGLE_NS;
+    if kept <= 0.0 {
+        return cap;
+    }
+    ((AFRESH_VOXEL_NS * voxels as f64 / kept) as usize).min(cap)
+}
+
+/// A kept contour's drag step of one value unit, with its GPU preparation,
+/// in nanoseconds of wall time per triangle on one core, and the share of
+/// it that stays serial on more: measured on colin27_ch2 (2026-12-05,
+/// session 25, release, `FLEXISO_BENCH_DRAG=1 FLEXISO_BENCH_QUICK=1 cargo
+/// bench --bench contour`, with `RAYON_NUM_THREADS=1` and 2; the 20-step
+/// drags of a 229k-326k and an 802k-881k-triangle contour, medians): 22 and
+/// 63 ms on one core, 15 and 45 ms on two (1.45 times faster), against 21
+/// and 32 ms for the same steps extracted afresh by the sweep on two.
+const KEPT_NS: f64 = 78.0;
+/// See [`KEPT_NS`]: 1.45 times faster on 2 cores.
+const KEPT_SERIAL: f64 = 0.38;
+/// The same drag steps extracted afresh by the parallel sweep and prepared,
+/// in nanoseconds of CPU, spread over the cores: per voxel of the volume
+/// and per triangle of the contour (21, 32 and 126 ms on two cores at
+/// 0.27, 0.84 and 5.5 M triangles, in the runs of [`KEPT_NS`]).
+const AFRESH_VOXEL_NS: f64 = 4.4;
+/// See [`AFRESH_VOXEL_NS`].
+const AFRESH_TRIANGLE_NS: f64 = 40.0;
 
 /// An empty slot (edge without contour vertex, tetrahedron without pair,
 /// freed vertex).

@@ -9,18 +9,20 @@
 //! Every answer carries its request number; the selection drops answers
 //! older than what it shows.
 //!
-//! **Dragging.** Once a contour's size is known and it is at most
-//! [`KEPT_TRIANGLES`], its next request starts a [`DraggedContour`] kept
+//! **Dragging.** Once a contour's size is known and it is small enough
+//! that a kept step beats the parallel sweep ([`kept_limit`], at most
+//! [`KEPT_TRIANGLES`]), its next request starts a [`DraggedContour`] kept
 //! for the contour last dragged, and the requests after that move it at
 //! the cost of what changed (the same mesh, see [`crate::contour::drag`]):
 //! on colin27_ch2 a 156k-triangle contour's step takes 7 ms instead of 30,
-//! an 854k-triangle one's 65 ms instead of 124. Larger contours (the head:
-//! 5.4 M triangles) are extracted afresh by the parallel sweep, which is
-//! faster there. A refused step (the change as large as the contour, or
+//! a 229k-326k-triangle one's 15 ms instead of 21. Larger contours (an
+//! 854k-triangle one: 32 ms a step instead of 45 kept; the head, 5.4 M
+//! triangles) are extracted afresh by the parallel sweep, which is faster
+//! there. A refused step (the change as large as the contour, or
 //! a contour not reached through the slab between the two cuts) starts
 //! afresh.
 //!
-//! **Kept ahead.** A contour of at most [`KEPT_TRIANGLES`] extracted
+//! **Kept ahead.** A contour small enough to keep extracted
 //! afresh (a click, its size unknown until then) is then kept at its
 //! isovalue by a background job, so that the first step of a drag that
 //! follows also costs only what changed: on colin27_ch2 an 854k-triangle
@@ -67,7 +69,7 @@ use std::sync::{Arc, Mutex};
 use super::{Job, JobError, Notify};
 use crate::app::ids::ContourId;
 use crate::app::ids::{prepare, prepare_reusing};
-use crate::contour::drag::step_budget;
+use crate::contour::drag::{kept_limit, step_budget};
 use crate::contour::follow::Cancelled;
 use crate::contour::{
     ContourFollower, ContourMesh, DraggedContour, FollowerScratch, MeshTopology, path_seed,
@@ -102,15 +104,19 @@ pub enum Done {
     },
 }
 
-/// Contours of at most this many triangles are dragged by a kept
-/// [`DraggedContour`]; larger ones are extracted afresh at every step.
-/// Measured on colin27_ch2 (`cargo bench --bench contour`, 2 cores), a
-/// kept contour's step with its GPU preparation against extracting afresh
-/// (the explorer's path before, and the sweep alone): 7 ms against 30 at
-/// 156k triangles; 65 ms against 124 and 83 at 854k; 132 / 186 ms (median
-/// / worst) against 231 and 135 at 1.4-1.8 M; 1008 ms against 341 at 5.4 M
+/// Contours of at most this many triangles may be dragged by a kept
+/// [`DraggedContour`] (it holds about 65 bytes per triangle); those the
+/// parallel sweep extracts afresh faster ([`kept_limit`]) and all larger
+/// ones are extracted afresh at every step. Measured on colin27_ch2
+/// (`cargo bench --bench contour`, 2 cores), a kept contour's step with
+/// its GPU preparation against extracting afresh: 7 ms against 30 at 156k
+/// triangles; 65 ms against 124 and 83 at 854k; 132 / 186 ms (median /
+/// worst) against 231 and 135 at 1.4-1.8 M; 1008 ms against 341 at 5.4 M
 /// (every vertex moves at every step; see `contour::drag` for why the
-/// flood's order is not the cause).
+/// flood's order is not the cause). Since the sweep's passes moved fewer
+/// bytes and its arrays are recycled, 15 ms against 21 at 229k-326k and
+/// 45 against 32 at 802k-881k (session 25): the limit is now the volume's
+/// [`kept_limit`], about 460k triangles there.
 pub const KEPT_TRIANGLES: usize = 1_000_000;
 
 /// Volumes of at most this many vertices keep a dragged contour: it holds
@@ -185,7 +191,7 @@ type Extracted = (
 /// What a contour just extracted afresh (a click) gets ready, in the
 /// background, for a drag that may follow (see the module documentation).
 enum Ahead {
-    /// At most [`KEPT_TRIANGLES`]: the contour kept at its isovalue.
+    /// Small enough to keep: the contour kept at its isovalue.
     Keep(KeepAhead),
     /// Larger: a spare mesh and GPU form of its size, pages touched, for
     /// the first drag step to write into.
@@ -228,8 +234,9 @@ pub struct Extractions {
     /// Keeps the contour last extracted afresh, or makes spares for it
     /// (see the module documentation); it tells no one when done.
     keep_ahead: Job<()>,
-    /// [`KEPT_TRIANGLES`] (smaller in tests).
-    kept_triangles: usize,
+    /// The most triangles a contour kept for dragging has: the volume's
+    /// [`kept_limit`] when None (set in tests).
+    kept_triangles: Option<usize>,
 }
 
 impl std::fmt::Debug for Extractions {
@@ -252,8 +259,17 @@ impl Extractions {
             kept: Arc::default(),
             spares: Arc::default(),
             keep_ahead: Job::new(None),
-            kept_triangles: KEPT_TRIANGLES,
+            kept_triangles: None,
         }
+    }
+
+    /// The most triangles a contour of `field` kept for dragging has:
+    /// where a kept step stops beating the parallel sweep on this
+    /// machine's cores, at most [`KEPT_TRIANGLES`].
+    fn kept_triangles(&self, field: &ScalarField) -> usize {
+        self.kept_triangles.unwrap_or_else(|| {
+            kept_limit(field.len(), rayon::current_num_threads(), KEPT_TRIANGLES)
+        })
     }
 
     /// Extracts the contour of `superarc` at `h` as request `request` of
@@ -280,7 +296,7 @@ impl Extractions {
         newest.store(request, Ordering::Relaxed);
         let sizes = Arc::clone(&self.sizes);
         let kept = Arc::clone(&self.kept);
-        let kept_triangles = self.kept_triangles;
+        let kept_triangles = self.kept_triangles(&field);
         let spares = Arc::clone(&self.spares);
         self.extract
             .entry(id)
@@ -379,7 +395,7 @@ impl Extractions {
     /// background, unless a newer request or its removal comes first.
     fn keep_ahead(&mut self, id: ContourId, request: u64, ahead: KeepAhead) {
         let kept = Arc::clone(&self.kept);
-        let kept_triangles = self.kept_triangles;
+        let kept_triangles = self.kept_triangles(&ahead.field);
         let Some(newest) = self.newest.get(&id).map(Arc::clone) else {
             return;
         };
@@ -562,7 +578,7 @@ impl Extractions {
 
 /// The contour of `superarc` at `h` by the contour kept for dragging
 /// (see the module documentation): moved there if it is `id`'s, else
-/// started there, when `id`'s last mesh had at most [`KEPT_TRIANGLES`]
+/// started there, when `id`'s last mesh had at most `kept_triangles`
 /// (`expected`). None when this is not the way (no size known, a large
 /// contour or volume, a 2D grid, or a contour that proved larger than the
 /// limit while it was being kept: `expected` then says so): then
@@ -781,7 +797,7 @@ mod tests {
     fn a_contour_too_large_to_keep_is_dragged_through_spares_made_ahead() {
         let (field, tree, arc, lo, hi) = cube_and_its_longest_arc();
         let mut jobs = Extractions::new(None);
-        jobs.kept_triangles = 10;
+        jobs.kept_triangles = Some(10);
         let id = ContourId(5);
         // What the window shows: the newest mesh.
         let mut shown: Option<Arc<ContourMesh>> = None;
