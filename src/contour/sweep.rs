@@ -1143,3 +1143,52 @@ fn sweep_one<T: Scalar>(
         bands,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contour::ContourFollower;
+    use crate::contour::global::spanning_arcs;
+    use crate::contour::seed::PathSeeds;
+    use crate::field::Values;
+    use crate::progress::Progress;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// The whole isosurface by one sweep tells its contours apart
+        /// itself (its components match the spanning arcs one to one, so
+        /// no caller falls back to following), each the follower's:
+        /// random 8-bit grids with many ties, cut into slabs.
+        #[test]
+        fn the_sweep_tells_every_contour_apart(
+            field in (2usize..9, 2usize..9, 2usize..12).prop_flat_map(|(x, y, z)| {
+                proptest::collection::vec(0u8..5, x * y * z).prop_map(move |v| {
+                    ScalarField::new([x, y, z], Values::U8(v)).expect("valid")
+                })
+            }),
+            h in 0u8..9,
+        ) {
+            let tree = ContourTree::from_field(&field, &Progress::new()).expect("built").0;
+            let iso = Isovalue::new(h as f64 / 2.0);
+            let path_seeds = PathSeeds::new();
+            let seeds: Vec<PathSeed> = spanning_arcs(&tree, &field, iso)
+                .into_iter()
+                .filter_map(|arc| path_seeds.seed(&tree, &field, arc, iso))
+                .collect();
+            let swept = all_contours_by_sweep(&field, &seeds, iso);
+            prop_assert!(swept.is_some(), "the components match the seeds");
+            let swept = swept.unwrap_or_default();
+            prop_assert_eq!(swept.len(), seeds.len());
+            let mut follower = ContourFollower::new(&field);
+            for seed in &seeds {
+                let mesh = swept.iter().find(|m| m.arc == seed.arc);
+                prop_assert!(mesh.is_some(), "a mesh per arc");
+                let want = follower.follow(seed, iso);
+                let got = mesh.map(ContourMesh::triangle_soup).unwrap_or_default();
+                prop_assert_eq!(got, want.triangle_soup());
+            }
+        }
+    }
+}
