@@ -728,8 +728,25 @@ fn drag_latency(
     let mut sweep = ContourFollower::new(field).with_serial_limit(0);
     let (mut worst_serial, mut worst_sweep) = (0f64, 0f64);
     let mut click = (f64::NAN, f64::NAN);
+    // As the explorer's worker does for a contour too large to keep, a
+    // step's mesh and GPU form go into the arrays of those two steps
+    // before, once the window has let them go.
+    // The first step after the click writes into the spares made after
+    // it (`Ahead::Spares` in the explorer).
+    let mut old = std::collections::VecDeque::new();
+    let mut ahead = None;
     for step in 0..5 {
         let iso = Isovalue::new(h - (h - bottom) * step as f64 / 6.0);
+        let spare = if old.len() == 2 {
+            old.pop_front()
+                .map(|(m, g)| (m, std::sync::Arc::try_unwrap(g).unwrap_or_default()))
+        } else {
+            ahead.take()
+        };
+        let spare_gpu = spare.map_or_else(Default::default, |(mesh, gpu)| {
+            follower.recycle(mesh);
+            gpu
+        });
         let t = Instant::now();
         let Some(seed) = seeds.seed(tree, field, arc, iso) else {
             break;
@@ -740,7 +757,11 @@ fn drag_latency(
         last = Some(mesh.num_triangles());
         // As the explorer's worker does: the mesh is made ready for the
         // GPU on the extracting thread, the UI thread only copies it.
-        let prepared = prepare(&mesh);
+        let (p, n, i) = (&mesh.positions, &mesh.normals, &mesh.indices);
+        let prepared = std::sync::Arc::new(
+            flexiso::render::PreparedMesh::new_known(p, n, i, (&mesh).into(), spare_gpu)
+                .expect("a contour is a valid mesh"),
+        );
         let extract = t.elapsed().as_secs_f64() * 1e3;
         // The same step by the serial follower and by the sweep alone.
         let t = Instant::now();
@@ -755,7 +776,7 @@ fn drag_latency(
         let (mut upload, mut render, mut frames) = (0.0, 0.0, 0);
         if let (Some(g), Some(r)) = (&gpu, &mut renderer) {
             let t = Instant::now();
-            r.set_prepared_mesh(&g.device, 1, std::sync::Arc::new(prepared))
+            r.set_prepared_mesh(&g.device, 1, std::sync::Arc::clone(&prepared))
                 .expect("upload");
             frames = 1;
             while r.upload_pending(
@@ -779,9 +800,22 @@ fn drag_latency(
         if step == 0 {
             // The click: its size unknown.
             click = (extract, upload);
+            let (v, t) = (mesh.positions.len(), mesh.num_triangles());
+            let kept = flexiso::contour::drag::kept_limit(
+                field.len(),
+                rayon::current_num_threads(),
+                flexiso::app::jobs::extraction::KEPT_TRIANGLES,
+            );
+            if t > kept {
+                ahead = Some((
+                    flexiso::contour::ContourMesh::spare(mesh.arc, v, t),
+                    flexiso::render::PreparedMesh::spare(v, t),
+                ));
+            }
         } else if extract + upload > worst.0 + worst.1 {
             worst = (extract, upload, render, mesh.num_triangles(), frames);
         }
+        old.push_back((mesh, prepared));
     }
     // Steps of one value unit down the arc's chain (100-arc level, by
     // volume), as a mouse drag makes them.
@@ -811,7 +845,7 @@ fn drag_latency(
     println!(
         "{name}: dragging a contour of {} triangles (arc {:?}, from h = {h} down its arc): \
          the click (size unknown) {:.1} ms + upload {:.1} ms; \
-         worst of 4 steps after it, extraction (and preparation) {:.1} ms + upload {:.1} ms ({} frames) = {:.1} ms; \
+         worst of 4 steps after it (arrays of two steps before recycled), extraction (and preparation) {:.1} ms + upload {:.1} ms ({} frames) = {:.1} ms; \
          its render {:.1} ms ({}); worst step extraction and preparation by the serial \
          follower {:.1} ms, by the sweep {:.1} ms",
         worst.3,
