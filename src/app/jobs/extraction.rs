@@ -27,8 +27,8 @@
 //! isovalue by a background job, so that the first step of a drag that
 //! follows also costs only what changed: on colin27_ch2 an 854k-triangle
 //! contour's first step cost 150-250 ms (following it and keeping it),
-//! and is now a step of 45-85 ms (800 ms and 156-325 ms in the window
-//! without a GPU). The job gives up as soon as a newer request for the
+//! and became a step of 45-85 ms (800 ms and 156-325 ms in the window
+//! without a GPU), when contours of that size were still kept. The job gives up as soon as a newer request for the
 //! contour comes (that request then keeps it itself, as before) or the
 //! contour is removed; it holds the cores only while the user has not
 //! moved yet.
