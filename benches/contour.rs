@@ -730,9 +730,9 @@ fn drag_latency(
     let mut click = (f64::NAN, f64::NAN);
     // As the explorer's worker does for a contour too large to keep, a
     // step's mesh and GPU form go into the arrays of those two steps
-    // before, once the window has let them go.
-    // The first step after the click writes into the spares made after
-    // it (`Ahead::Spares` in the explorer).
+    // before, once the window has let them go; the first step after the
+    // click into the spares made after it (`Ahead::Spares`).
+    let kept = flexiso::app::jobs::extraction::kept_triangles(field.len());
     let mut old = std::collections::VecDeque::new();
     let mut ahead = None;
     for step in 0..5 {
@@ -801,11 +801,6 @@ fn drag_latency(
             // The click: its size unknown.
             click = (extract, upload);
             let (v, t) = (mesh.positions.len(), mesh.num_triangles());
-            let kept = flexiso::contour::drag::kept_limit(
-                field.len(),
-                rayon::current_num_threads(),
-                flexiso::app::jobs::extraction::KEPT_TRIANGLES,
-            );
             if t > kept {
                 ahead = Some((
                     flexiso::contour::ContourMesh::spare(mesh.arc, v, t),
@@ -826,13 +821,8 @@ fn drag_latency(
     );
     let dir = if h - ends.0 > ends.1 - h { -1.0 } else { 1.0 };
     // The same drag kept and extracted afresh on every core: the explorer
-    // keeps contours of up to `kept_limit` triangles.
+    // keeps contours of up to `kept` triangles.
     scripted_drag(name, tree, field, Isovalue::new(h), arc, dir, 20);
-    let kept = flexiso::contour::drag::kept_limit(
-        field.len(),
-        rayon::current_num_threads(),
-        flexiso::app::jobs::extraction::KEPT_TRIANGLES,
-    );
     println!(
         "{name}: the explorer drags a contour of {} triangles {} (kept up to {kept} triangles here)",
         worst.3,

@@ -147,11 +147,11 @@ impl ContourMesh {
         }
     }
 
-    /// A mesh of no triangles whose arrays have room for a contour of
-    /// `vertices` and `triangles` and a quarter more, their pages already
-    /// touched: for [`ContourFollower::recycle`] before the first steps of
-    /// a drag, which would otherwise fault in fresh pages (see
-    /// [`crate::pages`]). Its contents are zeros.
+    /// Not a contour but arrays to recycle: room for a contour of
+    /// `vertices` and `triangles` and a quarter more, every element zero
+    /// and every page already touched, for [`ContourFollower::recycle`]
+    /// before the first steps of a drag, which would otherwise fault in
+    /// fresh pages (see [`crate::pages`]).
     pub fn spare(arc: ArcId, vertices: usize, triangles: usize) -> Self {
         Self {
             positions: crate::pages::spare(vertices),

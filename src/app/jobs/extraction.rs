@@ -28,10 +28,10 @@
 //! follows also costs only what changed: on colin27_ch2 an 854k-triangle
 //! contour's first step cost 150-250 ms (following it and keeping it),
 //! and became a step of 45-85 ms (800 ms and 156-325 ms in the window
-//! without a GPU), when contours of that size were still kept. The job gives up as soon as a newer request for the
-//! contour comes (that request then keeps it itself, as before) or the
-//! contour is removed; it holds the cores only while the user has not
-//! moved yet.
+//! without a GPU), when contours of that size were still kept. The job
+//! gives up as soon as a newer request for the contour comes (that
+//! request then keeps it itself, as before) or the contour is removed; it
+//! holds the cores only while the user has not moved yet.
 //!
 //! **Spares.** A kept contour's step writes its mesh, and its GPU form,
 //! into the arrays of one it made two steps before, once the window and
@@ -118,6 +118,13 @@ pub enum Done {
 /// 45 against 32 at 802k-881k (session 25): the limit is now the volume's
 /// [`kept_limit`], about 460k triangles there.
 pub const KEPT_TRIANGLES: usize = 1_000_000;
+
+/// The most triangles a contour of a volume of `voxels` kept for dragging
+/// has: where a kept step stops beating the parallel sweep on this
+/// machine's cores ([`kept_limit`]), at most [`KEPT_TRIANGLES`].
+pub fn kept_triangles(voxels: usize) -> usize {
+    kept_limit(voxels, rayon::current_num_threads(), KEPT_TRIANGLES)
+}
 
 /// Volumes of at most this many vertices keep a dragged contour: it holds
 /// 4 bytes per vertex of the volume (its slot table) while kept.
@@ -263,13 +270,11 @@ impl Extractions {
         }
     }
 
-    /// The most triangles a contour of `field` kept for dragging has:
-    /// where a kept step stops beating the parallel sweep on this
-    /// machine's cores, at most [`KEPT_TRIANGLES`].
+    /// The most triangles a contour of `field` kept for dragging has
+    /// ([`kept_triangles`], unless a test set it).
     fn kept_triangles(&self, field: &ScalarField) -> usize {
-        self.kept_triangles.unwrap_or_else(|| {
-            kept_limit(field.len(), rayon::current_num_threads(), KEPT_TRIANGLES)
-        })
+        self.kept_triangles
+            .unwrap_or_else(|| kept_triangles(field.len()))
     }
 
     /// Extracts the contour of `superarc` at `h` as request `request` of
