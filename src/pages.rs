@@ -26,7 +26,7 @@ pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
 }
 
 /// [`filled`] in an allocation of `capacity` (at least `n`).
-fn filled_within<T: Copy + Send + Sync>(n: usize, capacity: usize, value: T) -> Vec<T> {
+pub(crate) fn filled_within<T: Copy + Send + Sync>(n: usize, capacity: usize, value: T) -> Vec<T> {
     let mut v: Vec<T> = Vec::with_capacity(capacity.max(n));
     advise(v.as_ptr() as *const u8, v.capacity() * size_of::<T>());
     v.spare_capacity_mut()[..n]

@@ -91,8 +91,8 @@ fn info_prints_format_dims_type_range_histogram_and_memory() {
         // about a byte per vertex here) and 8, and 18 per candidate (an
         // 8-bit volume with 1.6 % candidates, whose order is made again
         // after the merge).
-        "contour tree 2.3 MiB at its peak",
-        "about 2.5 MiB",
+        "contour tree 2.2 MiB at its peak",
+        "about 2.4 MiB",
     ] {
         assert!(out.contains(want), "missing '{want}' in\n{out}");
     }

@@ -239,10 +239,31 @@ fn sweep_trees_both_ways<M: Mesh>(
     // The words seeded with the codes, as the engine makes them.
     let words = sweep::link_words(mesh, values);
     assert_eq!(words.candidates, candidates);
-    assert!(words.join.iter().zip(&codes).all(|(&w, &c)| w == c as u32));
+    assert!(
+        codes
+            .iter()
+            .enumerate()
+            .all(|(i, &c)| words.join.get(i) == c as u32)
+    );
     assert_eq!(words.join, words.split);
+    // The same with a word per vertex (what a mesh of 2^23 candidates or
+    // more gets), whole and in blocks: the same trees, word for word.
+    let wide = sweep::LinkWords {
+        join: words.join.clone().widen(),
+        split: words.split.clone().widen(),
+        candidates,
+    };
     let ((join, _), (split, _)) =
         blocks::sweep_trees(mesh, values, words, order.into(), cuts, &p).expect("not cancelled");
+    let ((wide_join, _), (wide_split, _)) =
+        blocks::sweep_trees(mesh, values, wide, order.into(), cuts, &p).expect("not cancelled");
+    assert!(join.0.leafward.is_packed() && !wide_join.0.leafward.is_packed());
+    let widened = |mut t: sweep::SweepTree| {
+        t.leafward = t.leafward.widen();
+        t
+    };
+    assert_eq!(widened(join.0.clone()), wide_join.0);
+    assert_eq!(widened(split.0.clone()), wide_split.0);
     (whole, (join, split))
 }
 

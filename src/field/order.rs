@@ -569,28 +569,77 @@ where
 /// Sorts ids by a 32-bit key: (key, id) pairs are first bucketed by the
 /// key's high 16 bits (a stable parallel counting pass in id order), then
 /// each bucket's pairs are sorted on their own thread, and the ids read
-/// off. Needs 8 bytes per id beyond the output while sorting, so 12 in
-/// all, as the sweeps.
+/// off into the first half of the pairs' own allocation. Holds 8 bytes
+/// per id while sorting (and at most 1 more of scratch), then 4: less than
+/// the sweeps after it.
 fn radix_sort_u32_keys<K>(n: usize, key: K) -> Vec<u32>
 where
     K: Fn(usize) -> u32 + Sync,
 {
+    // The pairs live in words, two per id, so that the ids can be read off
+    // in place into a `Vec<u32>`; an allocation this large is 8-aligned on
+    // every allocator the program meets, else the pairs get their own.
+    let mut words = crate::pages::filled(2 * n, 0u32);
+    // SAFETY: u64 has no invalid bit patterns; `align_to_mut` only takes
+    // the aligned middle.
+    match unsafe { words.align_to_mut::<u64>() } {
+        ([], pairs, []) => sort_pairs(pairs, &key),
+        _ => {
+            let mut pairs = crate::pages::filled(n, 0u64);
+            sort_pairs(&mut pairs, &key);
+            return pairs.iter().map(|&p| p as u32).collect();
+        }
+    }
+    // The id of pair i (its low half) is word 2i + at; it moves to word i.
+    // Waves [s, 2s) write words s.. below 2s, whose pairs an earlier wave
+    // read, and read words 2s.., which no write of theirs reaches.
+    let at = usize::from(cfg!(target_endian = "big"));
+    const SERIAL: usize = 1 << 16;
+    for i in 0..n.min(SERIAL) {
+        words[i] = words[2 * i + at];
+    }
+    let mut s = SERIAL;
+    while s < n {
+        let e = (2 * s).min(n);
+        let (low, high) = words.split_at_mut(2 * s);
+        low[s..e]
+            .par_chunks_mut(1 << 16)
+            .zip(high[..2 * (e - s)].par_chunks(2 << 16))
+            .for_each(|(out, two)| {
+                for (o, t) in out.iter_mut().zip(two.chunks_exact(2)) {
+                    *o = t[at];
+                }
+            });
+        s = e;
+    }
+    words.truncate(n);
+    // The second half's pages go back at once.
+    crate::pages::release_spare(&mut words);
+    words
+}
+
+/// [`radix_sort_u32_keys`]' pairs, (key, id) for ids `0..pairs.len()`,
+/// made and sorted.
+fn sort_pairs<K>(pairs: &mut [u64], key: &K)
+where
+    K: Fn(usize) -> u32 + Sync,
+{
+    let n = pairs.len();
     // (key, id) pairs scattered by the key's high 16 bits, read in id order:
     // no key is read again, nor from random places.
-    let mut pairs = crate::pages::filled(n, 0u64);
     let ends = scatter_by_key(
         0..n,
         &|i| (key(i) >> 16) as usize,
         1 << 16,
         1 << 20,
-        &mut pairs,
+        pairs,
         |i| ((key(i) as u64) << 32) | i as u64,
     );
     // The last chunk's ends are the buckets' ends; the other rows (4 bytes
     // per key and chunk: megabytes) go at once.
     let bucket_ends = ends.into_iter().last().unwrap_or_default();
     let mut buckets: Vec<&mut [u64]> = Vec::with_capacity(1 << 16);
-    let mut rest = pairs.as_mut_slice();
+    let mut rest = pairs;
     let mut start = 0;
     for end in bucket_ends {
         let (head, tail) = rest.split_at_mut(end as usize - start);
@@ -600,12 +649,12 @@ where
     }
     // Each bucket's pairs are in id order: sorting them stably by the low
     // 16 bits of the key leaves them in (key, id) order. Each thread's
-    // scratch holds at most n / (2 threads) pairs, so all of them together
-    // stay within the 4 bytes per id that `out` takes later; a larger
-    // bucket (one value filling much of a volume) is sorted in place
+    // scratch holds at most n / (8 threads) pairs, so all of them together
+    // stay within a byte per id; a larger bucket (one value filling much
+    // of a volume, or a narrow range of values) is sorted in place
     // instead: (key, id) is unique, so an unstable sort gives the same
     // order.
-    let limit = (n / (2 * rayon::current_num_threads())).max(1 << 16);
+    let limit = (n / (8 * rayon::current_num_threads())).max(1 << 16);
     buckets
         .into_par_iter()
         .for_each_init(Vec::new, |scratch, b| {
@@ -615,15 +664,6 @@ where
                 sort_low_key_bits(b, scratch);
             }
         });
-    let mut out = crate::pages::filled(n, 0u32);
-    out.par_chunks_mut(1 << 16)
-        .zip(pairs.par_chunks(1 << 16))
-        .for_each(|(o, p)| {
-            for (o, p) in o.iter_mut().zip(p) {
-                *o = *p as u32;
-            }
-        });
-    out
 }
 
 /// Sorts (key, id) pairs stably by bits 0..16 of the key (bits 32..48 of

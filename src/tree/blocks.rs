@@ -49,8 +49,9 @@
 //! word for word (the tests compare them), so merge and augmentation do not
 //! know blocks were used.
 //!
-//! **Memory.** The per-vertex words are those of the whole sweep (4 bytes
-//! per vertex and direction); the blocks' union-finds are per node, as the
+//! **Memory.** The per-vertex words are those of the whole sweep (3 bytes
+//! per vertex and direction, or 4 where a block has 2^23 nodes or more:
+//! a block numbers its nodes in its words); the blocks' union-finds are per node, as the
 //! whole sweep's are per candidate; the glue adds about 40 bytes per node
 //! (both directions), released before the merge. Bands cost two planes per
 //! cut: 2 (B - 1) X Y nodes for B blocks, about 1.5 % of a 512³ volume cut
@@ -66,6 +67,7 @@
 //! nodes (candidates and bands) cross the wire: a few per cent of the
 //! vertices on smooth fields.
 
+use super::leafward::{self, Leafward, Word, with_words};
 use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
     union,
@@ -156,49 +158,37 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         .windows(2)
         .map(|w| Block::new(w[0], w[1], n, span))
         .collect();
-    let nodes_in: Vec<usize> = blocks
-        .par_iter()
-        .map(|b| b.count_nodes(&join_words))
-        .collect();
+    let nodes_in: Vec<usize> = with_words!(&mut join_words, w => {
+        let w = &*w;
+        blocks.par_iter().map(|b| b.count_nodes(w)).collect()
+    });
+    // A block's nodes are numbered in its words: too many for 3 bytes
+    // (bands of a mesh with nearly 2^23 candidates), the words widen.
+    if join_words.is_packed() && !nodes_in.iter().all(|&k| leafward::packs(k)) {
+        (join_words, split_words) = (join_words.widen(), split_words.widen());
+    }
     let mut offset = vec![0u32; blocks.len() + 1];
     for (b, &k) in nodes_in.iter().enumerate() {
         offset[b + 1] = offset[b] + k as u32;
     }
 
     // 1. Both sweeps of every block, all at once.
-    let mut tasks: Vec<(bool, usize, &mut [u32])> = Vec::with_capacity(2 * blocks.len());
-    for (join, words) in [(true, &mut join_words), (false, &mut split_words)] {
-        let mut rest = words.as_mut_slice();
-        for (b, block) in blocks.iter().enumerate() {
-            let (head, tail) = rest.split_at_mut((block.hi - block.lo) as usize);
-            tasks.push((join, b, head));
-            rest = tail;
+    let trees: Vec<BlockTree> = match (&mut join_words, &mut split_words) {
+        (Leafward::Words(j), Leafward::Words(s)) => {
+            sweep_blocks(mesh, values, order, &blocks, &nodes_in, j, s, progress)
         }
-    }
-    let trees: Vec<BlockTree> = tasks
-        .into_par_iter()
-        .map(|(join, b, words)| {
-            if progress.is_cancelled() {
-                return Err(Cancelled);
-            }
-            let tree = sweep::sweep::<M, O, true>(
-                mesh,
-                values,
-                nodes_in[b],
-                join,
-                order,
-                blocks[b],
-                words,
-                !join,
-                progress,
-                join && b == 0,
-            );
-            if progress.is_cancelled() {
-                return Err(Cancelled);
-            }
-            tree
-        })
-        .collect::<Result<_, _>>()?;
+        (Leafward::Packed { words: j, len }, Leafward::Packed { words: s, .. }) => sweep_blocks(
+            mesh,
+            values,
+            order,
+            &blocks,
+            &nodes_in,
+            leafward::entries_mut(j, *len),
+            leafward::entries_mut(s, *len),
+            progress,
+        ),
+        _ => unreachable!("both records are made alike"),
+    }?;
     let (join_trees, split_trees) = trees.split_at(blocks.len());
 
     // 2. The nodes in the vertex order (each block's list is sorted: the
@@ -218,13 +208,13 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         .par_iter()
         .map(|block| {
             let (mut above, mut below) = (Vec::new(), Vec::new());
-            let node = |w: u32| offset[block_of(w)] + (split_words[w as usize] & !CANDIDATE);
+            let node = |w: u32| offset[block_of(w)] + (split_words.get(w as usize) & !CANDIDATE);
             for u in block.band() {
                 let gu = node(u);
                 mesh.for_each_neighbour(u, |w| {
                     if !block.contains(w) {
                         debug_assert!(
-                            split_words[w as usize] & CANDIDATE != 0,
+                            split_words.get(w as usize) & CANDIDATE != 0,
                             "a band vertex is a node"
                         );
                         if values.above(w, u) {
@@ -261,8 +251,8 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
 
     // 3. Every vertex's final word.
     rayon::join(
-        || gluing.place(true, &join_glue, &mut join_words),
-        || gluing.place(false, &split_glue, &mut split_words),
+        || with_words!(&mut join_words, w => gluing.place(true, &join_glue, w)),
+        || with_words!(&mut split_words, w => gluing.place(false, &split_glue, w)),
     );
     let elapsed = t.elapsed();
     let join = SweepTree {
@@ -278,6 +268,54 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         vertex: split_glue.vertex,
     };
     Ok(((JoinTree(join), elapsed), (SplitTree(split), elapsed)))
+}
+
+/// Step 1: the join and split sweeps of every block, all at once; the
+/// join trees first, then the split trees, block by block.
+#[allow(clippy::too_many_arguments)]
+fn sweep_blocks<M: Mesh, O: VertexOrder + ?Sized, W: Word>(
+    mesh: &M,
+    values: &O,
+    order: OrderView<'_>,
+    blocks: &[Block],
+    nodes_in: &[usize],
+    join_words: &mut [W],
+    split_words: &mut [W],
+    progress: &Progress,
+) -> Result<Vec<BlockTree>, Cancelled> {
+    let mut tasks: Vec<(bool, usize, &mut [W])> = Vec::with_capacity(2 * blocks.len());
+    for (join, words) in [(true, join_words), (false, split_words)] {
+        let mut rest = words;
+        for (b, block) in blocks.iter().enumerate() {
+            let (head, tail) = rest.split_at_mut((block.hi - block.lo) as usize);
+            tasks.push((join, b, head));
+            rest = tail;
+        }
+    }
+    tasks
+        .into_par_iter()
+        .map(|(join, b, words)| {
+            if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
+            let tree = sweep::sweep::<M, O, W, true>(
+                mesh,
+                values,
+                nodes_in[b],
+                join,
+                order,
+                blocks[b],
+                words,
+                !join,
+                progress,
+                join && b == 0,
+            );
+            if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
+            tree
+        })
+        .collect()
 }
 
 /// What the glue of one direction leaves.
@@ -444,7 +482,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
     }
 
     /// Step 3: every vertex's word, from its block's word and the glue.
-    fn place(&self, join: bool, glued: &Glued, words: &mut [u32]) {
+    fn place<W: Word>(&self, join: bool, glued: &Glued, words: &mut [W]) {
         const CHUNK: usize = 1 << 16;
         let mut rest = words;
         for (b, block) in self.blocks.iter().enumerate() {
@@ -455,13 +493,14 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 .enumerate()
                 .for_each(|(c, chunk)| {
                     let first = block.lo + (c * CHUNK) as u32;
-                    for (i, w) in chunk.iter_mut().enumerate() {
-                        if *w & CANDIDATE != 0 {
+                    for (i, word) in chunk.iter_mut().enumerate() {
+                        let w = word.get();
+                        if w & CANDIDATE != 0 {
                             // A node: a candidate's own number, flagged,
                             // or the lowest candidate a band vertex joined.
-                            let g = (base + (*w & !CANDIDATE)) as usize;
+                            let g = (base + (w & !CANDIDATE)) as usize;
                             let c = glued.lowest[g];
-                            *w = if self.candidate[g] { CANDIDATE | c } else { c };
+                            *word = W::of(if self.candidate[g] { CANDIDATE | c } else { c });
                             continue;
                         }
                         let v = first + i as u32;
@@ -471,7 +510,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                         // search goes on from there. Below x, up to a
                         // candidate, every node is a contracted band vertex
                         // of one child, so y's lowest candidate is x's.
-                        let mut x = base + *w;
+                        let mut x = base + w;
                         loop {
                             let [c, cv] = glued.below[x as usize];
                             if c == NONE || !self.before(join, cv, v) {
@@ -479,7 +518,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                             }
                             x = c;
                         }
-                        *w = glued.lowest[x as usize];
+                        *word = W::of(glued.lowest[x as usize]);
                     }
                 });
         }

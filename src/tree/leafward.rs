@@ -1,18 +1,24 @@
-//! The sweeps' per-vertex records (each vertex's leafward candidate, or
-//! its own candidate number: [`super::sweep::CANDIDATE`]) held in 3 bytes
-//! per vertex instead of 4 while the candidates are merged, when there are
-//! fewer than 2^23 candidates (every scan but the noisiest of a billion
-//! vertices).
+//! The sweeps' per-vertex words (each vertex's link code until the sweep
+//! visits it, then its leafward candidate or its own candidate number:
+//! [`super::sweep::CANDIDATE`]) held in 3 bytes per vertex instead of 4
+//! from the link pass to the placement, when there are fewer than 2^23
+//! candidates (every scan but the noisiest of a billion vertices).
 //!
-//! The merge needs neither record; the placement after it needs both. So
-//! between the sweeps and the placement the two records, 8 bytes per
-//! vertex, are the largest thing the engine holds, beside the candidates'
-//! tables: packed, the merge's peak drops by 2 bytes per vertex (on
-//! `engine`, from 12.2 to about 10.3). Packing and unpacking happen in
-//! place, in the record's own allocation, so neither ever holds a second
-//! copy: four entries (four words) become three words, groups of entries
-//! at a time on every core, each wave of groups writing only words that
-//! no group of the same wave still has to read.
+//! Both sweeps run at once and each holds one word per vertex beside the
+//! vertex order, so the two records are the largest thing the engine holds
+//! while it sweeps and merges: in 3 bytes each they are 6 bytes per vertex
+//! instead of 8 (a smooth float field sweeps in 10 bytes per vertex with
+//! its 4-byte order, not 12). The sweeps read and write the entries in
+//! place ([`Word`] for `[u8; 3]`: a candidate flag in bit 23 instead of
+//! bit 31, the same 32-bit word to the sweep); only the placement unpacks
+//! the first record into `vertex_arc`, in place, in its own allocation, so
+//! no record is ever held twice: three words become four, groups of
+//! entries at a time on every core, each wave of groups writing only words
+//! that no group of the same wave still has to read.
+//!
+//! The link pass counts the candidates while it writes the codes, so a
+//! record starts packed and is widened in place ([`Leafward::widen`]) if
+//! the candidates (or, in blocks, a block's nodes) turn out too many.
 
 use super::sweep::CANDIDATE;
 use rayon::prelude::*;
@@ -21,66 +27,159 @@ use rayon::prelude::*;
 const PACKED_CANDIDATE: u32 = 1 << 23;
 /// The low 24 bits.
 const ENTRY: u32 = (1 << 24) - 1;
-/// Groups of four entries done one after another at the record's start
-/// (where the waves would be too small to share out), as a number of
-/// groups.
+/// Groups of four entries unpacked one after another at the record's
+/// start (where the waves would be too small to share out), as a number
+/// of groups.
 const SERIAL_GROUPS: usize = 1 << 12;
 
+/// A sweep's per-vertex word as it is stored: a whole word, or a 3-byte
+/// entry (little end first) whose bit 23 stands for [`CANDIDATE`].
+pub trait Word: Copy + Send + Sync {
+    /// The word.
+    fn get(self) -> u32;
+    /// Stores `w` (below 2^23 but for the [`CANDIDATE`] flag, if packed).
+    fn of(w: u32) -> Self;
+}
+
+impl Word for u32 {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        self
+    }
+
+    #[inline(always)]
+    fn of(w: u32) -> Self {
+        w
+    }
+}
+
+impl Word for [u8; 3] {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        let e = u32::from_le_bytes([self[0], self[1], self[2], 0]);
+        (e & !PACKED_CANDIDATE) | (e >> 23) << 31
+    }
+
+    #[inline(always)]
+    fn of(w: u32) -> Self {
+        debug_assert!(w & !CANDIDATE < PACKED_CANDIDATE);
+        let e = (w & !CANDIDATE) | (w >> 31) << 23;
+        let b = e.to_le_bytes();
+        [b[0], b[1], b[2]]
+    }
+}
+
 /// A sweep's per-vertex record: its words, or the same entries packed.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Leafward {
     /// One word per vertex.
     Words(Vec<u32>),
-    /// Three words per four vertices; `len` vertices.
-    Packed { words: Vec<u32>, len: usize },
+    /// Three words per four vertices (3-byte entries, little end first;
+    /// the last group's unused bytes are 0); `len` vertices. The allocation
+    /// has room for a word per vertex, untouched, to unpack into.
+    Packed {
+        /// The entries, in `3 * len.div_ceil(4)` words.
+        words: Vec<u32>,
+        /// The number of vertices.
+        len: usize,
+    },
 }
 
-/// True when a record of a tree with this many candidates can be packed
-/// (by [`Leafward::pack`], which also keeps tiny records as they are).
+/// True when a record of a tree with this many candidates can be packed.
 pub fn packs(candidates: usize) -> bool {
-    candidates < PACKED_CANDIDATE as usize
+    candidates < PACKED_CANDIDATE as usize && cfg!(target_endian = "little")
+}
+
+/// Runs `$body` with `$w` bound to the record's entries as a mutable slice
+/// of its [`Word`]s (`u32` or `[u8; 3]`).
+macro_rules! with_words {
+    ($record:expr, $w:ident => $body:expr) => {
+        match $record {
+            $crate::tree::leafward::Leafward::Words(words) => {
+                let $w: &mut [u32] = words.as_mut_slice();
+                $body
+            }
+            $crate::tree::leafward::Leafward::Packed { words, len } => {
+                let $w: &mut [[u8; 3]] = $crate::tree::leafward::entries_mut(words, *len);
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_words;
+
+/// The `len` 3-byte entries of a packed record's words.
+pub fn entries_mut(words: &mut [u32], len: usize) -> &mut [[u8; 3]] {
+    assert!(3 * len <= 4 * words.len());
+    // SAFETY: `[u8; 3]` has alignment 1 and no invalid values; the `len`
+    // entries lie inside the words' bytes (asserted), which the returned
+    // slice borrows mutably.
+    unsafe { std::slice::from_raw_parts_mut(words.as_mut_ptr() as *mut [u8; 3], len) }
+}
+
+/// [`entries_mut`], shared.
+fn entries(words: &[u32], len: usize) -> &[[u8; 3]] {
+    assert!(3 * len <= 4 * words.len());
+    // SAFETY: as in `entries_mut`, borrowed shared.
+    unsafe { std::slice::from_raw_parts(words.as_ptr() as *const [u8; 3], len) }
 }
 
 impl Leafward {
-    /// The record `words` packed when the `candidates` allow it (and the
-    /// record is not tiny), in place; otherwise as it is.
-    pub fn pack(mut words: Vec<u32>, candidates: usize) -> Self {
-        let len = words.len();
-        if !packs(candidates) || len < 4 * SERIAL_GROUPS {
-            return Leafward::Words(words);
+    /// A record of `n` vertices whose words are all 0, packed where
+    /// `packed`; the pages are first touched on every core.
+    pub fn zeroed(n: usize, packed: bool) -> Self {
+        if packed {
+            // Three words per group of four entries, the last group whole.
+            let mut words = crate::pages::filled_within(3 * n.div_ceil(4), n, 0u32);
+            // The room to unpack into is not held until it is used (a
+            // huge page across the end would be, whole).
+            crate::pages::release_spare(&mut words);
+            Leafward::Packed { words, len: n }
+        } else {
+            Leafward::Words(crate::pages::filled(n, 0u32))
         }
-        // Whole groups in place, then the last, partial one (no growth:
-        // growing could copy the whole record).
-        let (groups, whole) = (len.div_ceil(4), len / 4);
-        for g in 0..SERIAL_GROUPS {
-            let four: [u32; 4] = std::array::from_fn(|k| words[4 * g + k]);
-            words[3 * g..3 * g + 3].copy_from_slice(&pack4(four));
+    }
+
+    /// A record holding the link `codes`, packed where `packed`.
+    pub fn of_codes(codes: &[u8], packed: bool) -> Self {
+        let mut record = Self::zeroed(codes.len(), packed);
+        with_words!(&mut record, w => w
+            .par_chunks_mut(1 << 16)
+            .zip(codes.par_chunks(1 << 16))
+            .for_each(|(w, c)| w.iter_mut().zip(c).for_each(|(w, &c)| *w = Word::of(c as u32))));
+        record
+    }
+
+    /// The number of vertices.
+    pub fn len(&self) -> usize {
+        match self {
+            Leafward::Words(words) => words.len(),
+            Leafward::Packed { len, .. } => *len,
         }
-        // Group g reads words 4g.. and writes 3g..: a wave of groups
-        // [s, e) with 3e <= 4s writes below everything it reads.
-        let mut s = SERIAL_GROUPS;
-        while s < whole {
-            let e = (s * 4 / 3).min(whole);
-            let (low, high) = words.split_at_mut(4 * s);
-            low[3 * s..3 * e]
-                .par_chunks_mut(3 << 10)
-                .zip(high[..4 * (e - s)].par_chunks(4 << 10))
-                .for_each(|(out, four)| {
-                    for (o, f) in out.chunks_exact_mut(3).zip(four.chunks_exact(4)) {
-                        o.copy_from_slice(&pack4([f[0], f[1], f[2], f[3]]));
-                    }
-                });
-            s = e;
+    }
+
+    /// True for a record of no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Vertex `i`'s word.
+    #[inline]
+    pub fn get(&self, i: usize) -> u32 {
+        match self {
+            Leafward::Words(words) => words[i],
+            Leafward::Packed { words, len } => entries(words, *len)[i].get(),
         }
-        if whole < groups {
-            let mut four = [0; 4];
-            four[..len - 4 * whole].copy_from_slice(&words[4 * whole..]);
-            words[3 * whole..3 * groups].copy_from_slice(&pack4(four));
-        }
-        words.truncate(3 * groups);
-        // The last quarter's pages go back; the capacity stays for
-        // unpacking (a reallocation could copy).
-        crate::pages::release_spare(&mut words);
-        Leafward::Packed { words, len }
+    }
+
+    /// True if the record is packed.
+    pub fn is_packed(&self) -> bool {
+        matches!(self, Leafward::Packed { .. })
+    }
+
+    /// The record with a word per vertex, unpacked in place if packed.
+    pub fn widen(self) -> Self {
+        Leafward::Words(self.into_words())
     }
 
     /// The record as words, unpacked in place (the allocation grown to a
@@ -148,8 +247,9 @@ impl Leafward {
 }
 
 /// Four words (candidate numbers below 2^23, `CANDIDATE` or not) as four
-/// 3-byte entries in three words, little end first.
-#[inline]
+/// 3-byte entries in three words, little end first: what [`Word`] for
+/// `[u8; 3]` writes, four at a time.
+#[cfg(test)]
 fn pack4(w: [u32; 4]) -> [u32; 3] {
     let e = w.map(|w| (w & !CANDIDATE) | (w >> 31) << 23);
     debug_assert!(w.iter().all(|&w| w & !CANDIDATE < PACKED_CANDIDATE));
@@ -177,6 +277,13 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// `words` as a record, packed when the `candidates` allow it.
+    fn pack(words: &[u32], candidates: usize) -> Leafward {
+        let mut record = Leafward::zeroed(words.len(), packs(candidates));
+        with_words!(&mut record, w => w.iter_mut().zip(words).for_each(|(w, &x)| *w = Word::of(x)));
+        record
+    }
+
     fn record(n: usize, candidates: u32, seed: u64) -> Vec<u32> {
         (0..n as u64)
             .map(|i| {
@@ -189,9 +296,9 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(40))]
-        /// Packed and unpacked in place, any record reads back as it was,
-        /// whole and from any group; it is packed exactly when its
-        /// candidates fit in 23 bits and it is not tiny.
+        /// Packed entry by entry and unpacked in place, any record reads
+        /// back as it was, whole, entry by entry and from any group; it is
+        /// packed exactly when its candidates fit in 23 bits.
         #[test]
         fn a_packed_record_reads_back(
             n in 0usize..200_000,
@@ -201,9 +308,14 @@ mod tests {
         ) {
             let candidates = if wide { 1u32 << 23 } else { (1 << 23) - 1 };
             let words = record(n, candidates, seed);
-            let leafward = Leafward::pack(words.clone(), candidates as usize);
-            let packed = matches!(leafward, Leafward::Packed { .. });
-            prop_assert_eq!(packed, !wide && n >= 4 * SERIAL_GROUPS);
+            let leafward = pack(&words, candidates as usize);
+            prop_assert_eq!(leafward.is_packed(), !wide);
+            prop_assert_eq!(leafward.len(), n);
+            for i in [0, n / 3, n.saturating_sub(1)] {
+                if i < n {
+                    prop_assert_eq!(leafward.get(i), words[i]);
+                }
+            }
             let start = ((at * n as f64) as usize) / 4 * 4;
             for len in [0, 1, 3, 4, 5, 4099] {
                 let len = len.min(n - start);
@@ -223,7 +335,7 @@ mod tests {
         let words: Vec<u32> = (0..n as u32)
             .map(|i| (i % (1 << 23)) | ((i & 1) << 31))
             .collect();
-        let leafward = Leafward::pack(words.clone(), 1 << 22);
+        let leafward = pack(&words, 1 << 22);
         let Leafward::Packed {
             words: ref packed, ..
         } = leafward
@@ -231,6 +343,7 @@ mod tests {
             panic!("packed")
         };
         assert_eq!(packed.len(), 3 * n / 4);
+        assert!(packed.capacity() >= n, "room to unpack in place");
         assert_eq!(leafward.into_words(), words);
     }
 }

@@ -70,7 +70,8 @@
 //! `B(b)`: no walk, no order.
 //!
 //! **Memory** (n vertices, c candidates, s supernodes, beyond the values):
-//! 8 bytes per vertex (the two leafward arrays) and, at the merge's peak
+//! 6 bytes per vertex (the two leafward records, 3 bytes each where the
+//! candidates are fewer than 2^23, else 8) and, at the merge's peak
 //! (the chains), 24 per candidate (the parents, the records, the chain
 //! pointers and answers, one bit for "is a supernode" with a count per 64
 //! in place of a table of supernode numbers) plus 20 per supernode (the
@@ -82,7 +83,10 @@
 //!
 //! Finally the regular vertices of each superarc are laid out in the vertex
 //! order by one counting pass over the order (the one pass that reads the
-//! vertices in value order; it only reads their superarc).
+//! vertices in value order; it only reads their superarc). An order of 4
+//! bytes per vertex that the grouping owns is read from its end in slabs
+//! and given back slab by slab, so that it and the arcs' vertex lists
+//! hold 4 bytes per vertex together, not 8 ([`group_owned`]).
 
 use super::leafward::Leafward;
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
@@ -445,6 +449,24 @@ pub fn group(placed: Placed, order: OrderView<'_>) -> Grouped {
     }
 }
 
+/// [`group`] with an order the grouping owns (and lets go): where the
+/// superarcs are few enough for it, read from its end in slabs, each
+/// slab's pages given back once grouped ([`group_by_arc_consuming`]).
+pub fn group_owned(placed: Placed, order: Vec<u32>) -> Grouped {
+    let (n, arcs) = (order.len(), placed.arcs.len());
+    let (offsets, arc_vertices) =
+        if arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n {
+            group_by_arc_consuming(&placed.vertex_arc, arcs, order)
+        } else {
+            group_by_arc(&placed.vertex_arc, arcs, OrderView::Ids(&order))
+        };
+    Grouped {
+        placed,
+        offsets,
+        arc_vertices,
+    }
+}
+
 /// Every vertex placed and the regular ones grouped by superarc.
 pub struct Grouped {
     placed: Placed,
@@ -485,21 +507,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
         // One chunk: its counts are the superarcs' sizes, which any order
         // gives, so they are read off `vertex_arc` in id order (streaming,
         // on every core) rather than through the order.
-        let per = n.div_ceil(threads).max(1 << 16);
-        let count = vertex_arc
-            .par_chunks(per)
-            .map(|part| {
-                let mut count = vec![0u32; arcs];
-                for &a in part.iter().filter(|&&a| a & NODE_FLAG == 0) {
-                    count[a as usize] += 1;
-                }
-                count
-            })
-            .reduce_with(|mut x, y| {
-                x.iter_mut().zip(y).for_each(|(x, y)| *x += y);
-                x
-            })
-            .unwrap_or_else(|| vec![0; arcs]);
+        let count = arc_sizes(vertex_arc, arcs);
         vec![count]
     } else {
         ranges
@@ -543,6 +551,107 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     (offsets, arc_vertices)
 }
 
+/// Slabs of the order [`group_by_arc_consuming`] reads one after another.
+const SLABS: usize = 8;
+/// Chunks of a slab per thread, each counted and placed on its own.
+const CONSUMING_CHUNKS: usize = 2;
+
+/// The size of each superarc (its regular vertices), read off
+/// `vertex_arc` in id order on every core.
+fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
+    let per = vertex_arc
+        .len()
+        .div_ceil(rayon::current_num_threads())
+        .max(1 << 16);
+    vertex_arc
+        .par_chunks(per)
+        .map(|part| {
+            let mut count = vec![0u32; arcs];
+            for &a in part.iter().filter(|&&a| a & NODE_FLAG == 0) {
+                count[a as usize] += 1;
+            }
+            count
+        })
+        .reduce_with(|mut x, y| {
+            x.iter_mut().zip(y).for_each(|(x, y)| *x += y);
+            x
+        })
+        .unwrap_or_else(|| vec![0; arcs])
+}
+
+/// [`group_by_arc`] for an order the grouping owns: read from its end in
+/// [`SLABS`] slabs, each slab's pages given back once it is grouped, so
+/// that the order and the arcs' vertex lists (whose pages are touched as
+/// they are written) hold about 4 bytes per vertex together, not 8: on a
+/// float field, whose order is 4 bytes per vertex and not remade, that
+/// was the build's peak. Each arc's slots fill from its end down, slab by
+/// slab and, within a slab, chunk by chunk from the last: the same layout.
+fn group_by_arc_consuming(
+    vertex_arc: &[u32],
+    arcs: usize,
+    mut order: Vec<u32>,
+) -> (Vec<u32>, Vec<u32>) {
+    let n = order.len();
+    let sizes = arc_sizes(vertex_arc, arcs);
+    let mut offsets = vec![0u32; arcs + 1];
+    for a in 0..arcs {
+        offsets[a + 1] = offsets[a] + sizes[a];
+    }
+    drop(sizes);
+    // Zeroed lazily (fresh pages): only what is written is held.
+    let mut arc_vertices = vec![0u32; offsets[arcs] as usize];
+    let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
+    let mut free_end: Vec<u32> = offsets[1..].to_vec();
+    let chunks = CONSUMING_CHUNKS * rayon::current_num_threads();
+    let slab = n.div_ceil(SLABS).max(1);
+    let mut hi = n;
+    while hi > 0 {
+        let lo = hi.saturating_sub(slab);
+        let per = (hi - lo).div_ceil(chunks).max(1);
+        let ranges: Vec<std::ops::Range<usize>> = (lo..hi)
+            .step_by(per)
+            .map(|s| s..(s + per).min(hi))
+            .collect();
+        let view = OrderView::Ids(&order);
+        let mut starts: Vec<Vec<u32>> = ranges
+            .par_iter()
+            .map(|range| {
+                let mut count = vec![0u32; arcs];
+                for_each_arc(view, vertex_arc, range.clone(), |_, a| {
+                    count[a as usize] += 1
+                });
+                count
+            })
+            .collect();
+        // The last chunk's vertices of an arc take its highest free slots.
+        for (a, end) in free_end.iter_mut().enumerate() {
+            for c in starts.iter_mut().rev() {
+                *end -= c[a];
+                c[a] = *end;
+            }
+        }
+        ranges
+            .into_par_iter()
+            .zip(starts.into_par_iter())
+            .for_each(|(range, mut fill)| {
+                let dst = &dst;
+                for_each_arc(view, vertex_arc, range, |v, a| {
+                    let slot = &mut fill[a as usize];
+                    // SAFETY: each (slab, chunk, arc) owns a disjoint range
+                    // of slots (taken from the arc's free end above), and
+                    // writes each slot once.
+                    unsafe { dst.write(*slot as usize, v) };
+                    *slot += 1;
+                });
+            });
+        order.truncate(lo);
+        crate::pages::release_spare(&mut order);
+        hi = lo;
+    }
+    debug_assert!(free_end.iter().zip(&offsets).all(|(e, o)| e == o));
+    (offsets, arc_vertices)
+}
+
 /// Calls `f(v, arc)` for each regular vertex `v` at the positions `range`
 /// of the order, with its superarc; the superarcs are read ahead (the
 /// reads are scattered over the volume).
@@ -564,4 +673,40 @@ fn for_each_arc(
             }
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(60))]
+        /// The grouping that reads its order from the end in slabs and
+        /// gives it back lays out every arc's vertices exactly as the one
+        /// that reads it whole: in the order, arc by arc.
+        #[test]
+        fn the_consuming_grouping_is_the_grouping(
+            n in 0usize..3000,
+            arcs in 1usize..40,
+            nodes in 0usize..50,
+            seed in any::<u64>(),
+        ) {
+            let hash = |i: u64| (i ^ seed).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 20;
+            let vertex_arc: Vec<u32> = (0..n as u64)
+                .map(|i| if (hash(i) as usize) % 50 < nodes { NODE_FLAG | 7 } else { (hash(i + 1) % arcs as u64) as u32 })
+                .collect();
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            order.sort_by_key(|&v| hash(v as u64 + 99));
+            let whole = group_by_arc(&vertex_arc, arcs, OrderView::Ids(&order));
+            let consumed = group_by_arc_consuming(&vertex_arc, arcs, order.clone());
+            prop_assert_eq!(&whole, &consumed);
+            // And it is the grouping: each arc's vertices, in the order.
+            let (offsets, verts) = consumed;
+            for a in 0..arcs {
+                let expect: Vec<u32> = order.iter().copied().filter(|&v| vertex_arc[v as usize] == a as u32).collect();
+                prop_assert_eq!(&verts[offsets[a] as usize..offsets[a + 1] as usize], &expect[..]);
+            }
+        }
+    }
 }

@@ -15,16 +15,18 @@
 //!
 //! **Memory per vertex** (n vertices, beyond the field's own values): the
 //! vertex order (4 bytes, or 0.6-1.2 for 8-bit values, whose order is
-//! packed: [`crate::field::PackedOrder`]) plus 8, plus the candidates' share
-//! below. The float sort holds 12 ((value, id) pairs and the order); the
-//! sweeps the order and 8 (each sweep's one word per vertex, which holds
-//! the vertex's link code until the sweep visits it: the union-find lives
-//! on the candidates); merge and placement the order and the two leafward
-//! records, the first of which becomes `vertex_arc`, then the arcs' vertex
-//! lists take the place of the second. The records are held in 3 bytes per
-//! vertex each from the sweeps to the placement when there are fewer than
-//! 2^23 candidates ([`leafward`], packed and unpacked in place): 6 bytes
-//! per vertex through the merge, 7 at the placement (8 otherwise).
+//! packed: [`crate::field::PackedOrder`]) plus 6 to 8, plus the
+//! candidates' share below. The float sort holds 8 ((value, id) pairs, the
+//! ids then read off in place); the sweeps the order and 6 (each sweep's
+//! one word per vertex, which holds the vertex's link code until the sweep
+//! visits it: the union-find lives on the candidates); merge and
+//! placement the order and the two leafward records, the first of which
+//! becomes `vertex_arc`; the grouping the order, `vertex_arc` and the
+//! arcs' vertex lists (an order of ids given back as it is read, so 8 in
+//! all). The records are held in 3 bytes per vertex each from the link
+//! pass to the placement when there are fewer than 2^23 candidates
+//! ([`leafward`]; the first unpacked in place): 6 bytes per vertex through
+//! the sweeps and the merge, 7 at the placement (8 otherwise).
 //! Candidates add 18 bytes each during the sweeps and about 44 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
@@ -34,18 +36,19 @@
 //! go before the merge and sorts again after the placement, once the
 //! second leafward record and the candidates' tables are gone
 //! ([`remakes_order`]); the order goes again before the tree's node
-//! adjacency is made. Measured peaks (`flexiso bench`): 10-11 bytes per
-//! vertex on the 8-bit brains (7 % candidates), 9 on colin27_ch2better,
-//! 12.0-12.2 on a smooth float field, 11.5 on engine (12 %), 20 on tooth
-//! (31 %, whose finished tree alone holds 12.75), 16.5 on a noisy 1024³
-//! scan (28 %: too many candidates to pack). [`check_memory`] refuses a
+//! adjacency is made. Measured peaks (`flexiso bench`, session 26): about
+//! 10 bytes per vertex on the 8-bit brains (7 % candidates; the grouping),
+//! 11.1 on a smooth float field (the placement; 12.1 before the float sort
+//! and grouping gave back their order), 16 on tooth (31 %, whose finished
+//! tree alone holds 12.75; the merge), 16.5 on a noisy 1024³ scan (28 %:
+//! too many candidates to pack). [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted. The
 //! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
 //! O(supernodes).
 
 pub mod blocks;
 pub mod json;
-mod leafward;
+pub mod leafward;
 mod merge;
 pub mod raichel_seshadhri;
 pub mod sweep;
@@ -210,24 +213,28 @@ impl From<Cancelled> for BuildError {
 /// Peak bytes the engine holds beyond the values for `n` vertices of
 /// which `candidates` are candidate nodes (the module doc's account), with
 /// an order of `order_bytes` (about 1 per vertex packed for 8-bit values,
-/// else 4: [`crate::field::order_bytes`]): the order, 8 per vertex and 18
-/// per candidate while sweeping; then the order unless it is let go
-/// (`order_remade`, see [`remakes_order`]) and, at the merge, 8 per vertex
-/// and 44 per candidate (its tables and the tree it builds; fitted to the
-/// peaks measured on tooth, engine and colin27_ch2, within 10 %, above all
-/// three). With fewer than 2^23 candidates the sweeps' records are packed
-/// through the merge ([`leafward`]): 6 per vertex and 44 per candidate at
-/// the merge, 7 and 36 at the placement.
+/// else 4: [`crate::field::order_bytes`]): the order, the two sweeps'
+/// records and 18 per candidate while sweeping; then the order unless it
+/// is let go (`order_remade`, see [`remakes_order`]) and, at the merge,
+/// the records and 44 per candidate (its tables and the tree it builds;
+/// fitted to the peaks measured on tooth, engine and colin27_ch2, within
+/// 10 %, above all three); at the grouping the order (made again if it was
+/// let go), `vertex_arc` and the arcs' vertex lists, 8 per vertex. The
+/// records take 8 bytes per vertex, or 6 with fewer than 2^23 candidates
+/// ([`leafward`]: 3 bytes each from the link pass to the placement, which
+/// holds 7 and 36 per candidate).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
-    let sweeps = order_bytes + 8 * n + 18 * k;
+    let records = if leafward::packs(candidates) { 6 } else { 8 };
+    let sweeps = order_bytes + records * n + 18 * k;
     let merge = if leafward::packs(candidates) {
         (6 * n + MERGE_BYTES_PER_CANDIDATE * k).max(7 * n + 36 * k)
     } else {
         8 * n + MERGE_BYTES_PER_CANDIDATE * k
     };
     let held = if order_remade { 0 } else { order_bytes };
-    sweeps.max(merge + held)
+    let grouping = order_bytes + 8 * n;
+    sweeps.max(merge + held).max(grouping)
 }
 
 /// What a candidate node costs at the merge's peak (see [`peak_bytes`]).
@@ -235,20 +242,21 @@ const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
-/// 16-bit values, O(n)) and the merge, without the order, would still be
-/// the peak ([`peak_bytes`]). With packed records ([`leafward`]) that takes
-/// more than 1/18 of the vertices as candidates (the placement, 18 bytes
-/// per candidate above the sweeps, then outgrows them), else 1/64 (the
-/// merge, 26 bytes per candidate above the sweeps, is then the peak by at
-/// least 2/5 of a byte per vertex, worth a counting sort).
+/// 16-bit values, O(n)) and the merge or the placement, without the
+/// order, would still be above the grouping's 8 bytes per vertex beside
+/// it ([`peak_bytes`]). With packed records ([`leafward`]) that takes more
+/// than 1/36 of the vertices as candidates (the placement: 7 bytes per
+/// vertex and 36 per candidate), else 1/64 (the merge, 8 bytes per vertex
+/// and 44 per candidate, is then the peak by at least 2/3 of a byte per
+/// vertex, worth a counting sort).
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    let per = if leafward::packs(candidates) { 18 } else { 64 };
+    let per = if leafward::packs(candidates) { 36 } else { 64 };
     counting && candidates as u64 * per > n as u64
 }
 
 /// Refuses a build whose peak ([`peak_bytes`]) exceeds what is `available`
 /// once the vertex order and the link codes in the sweeps' words
-/// (`order_bytes` and 8 per vertex, already held) are counted back in: a
+/// (`order_bytes` and 6 or 8 per vertex, already held) are counted back in: a
 /// clear error instead of an allocation failure halfway through, on
 /// volumes that are large *and* noisy.
 pub fn check_memory(
@@ -259,7 +267,8 @@ pub fn check_memory(
     available: u64,
 ) -> Result<(), BuildError> {
     let needed = peak_bytes(n, candidates, order_bytes, order_remade);
-    let available = available.saturating_add(order_bytes + 8 * n as u64);
+    let records = if leafward::packs(candidates) { 6 } else { 8 };
+    let available = available.saturating_add(order_bytes + records * n as u64);
     if needed > available {
         return Err(BuildError::OutOfMemory {
             vertices: n,
@@ -400,8 +409,9 @@ impl ContourTree {
         let t = Instant::now();
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         // Held through the merge in 3 bytes per vertex where they fit.
-        let join_leafward = Leafward::pack(std::mem::take(&mut join.0.leafward), candidates);
-        let split_leafward = Leafward::pack(std::mem::take(&mut split.0.leafward), candidates);
+        let empty = || Leafward::Words(Vec::new());
+        let join_leafward = std::mem::replace(&mut join.0.leafward, empty());
+        let split_leafward = std::mem::replace(&mut split.0.leafward, empty());
         if remake.is_some() {
             source.let_go();
         }
@@ -419,10 +429,12 @@ impl ContourTree {
             progress.stage("augment");
         }
         let t = Instant::now();
-        let grouped = merge::group(placed, source.order());
-        // The order is not needed past the grouping: let it go before the
-        // tree's node adjacency is made.
-        drop(source);
+        // The order is not needed past the grouping: it goes before the
+        // tree's node adjacency is made (an order of ids as it is read).
+        let grouped = match source {
+            OrderSource::Owned(Order::Ids(ids), _) => merge::group_owned(placed, ids),
+            source => merge::group(placed, source.order()),
+        };
         let tree = grouped.into_tree();
         times.augment += t.elapsed();
         Ok((tree, times))
@@ -651,7 +663,8 @@ mod tests {
         // Exactly at the limit is allowed, a byte more is not.
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * 1000;
-            let held = order_bytes + 8 * 1000;
+            // The order and the packed records, 6 bytes per vertex.
+            let held = order_bytes + 6 * 1000;
             let peak = peak_bytes(1000, 10, order_bytes, false);
             assert!(check_memory(1000, 10, order_bytes, false, peak - held).is_ok());
             assert!(check_memory(1000, 10, order_bytes, false, peak - held - 1).is_err());
@@ -664,22 +677,23 @@ mod tests {
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
-        // candidates), below 1/18 of the vertices the sweeps stay the peak.
+        // candidates), below 1/36 of the vertices the grouping or the
+        // sweeps stay the peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(!remakes_order(n, n / 20, true));
-        assert!(remakes_order(n, n / 16, true));
+        assert!(!remakes_order(n, n / 40, true));
+        assert!(remakes_order(n, n / 30, true));
         let huge = 1usize << 30;
         assert!(remakes_order(huge, huge / 60, true), "unpacked: 1/64");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 16, n / 4, n / 2] {
+            for k in [n / 30, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
-            for k in [0, n / 64, n / 20] {
+            for k in [0, n / 64, n / 40] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
             }

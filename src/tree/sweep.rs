@@ -37,13 +37,16 @@
 //! codes need no array of their own, and the sweep touches one word per
 //! vertex where it touched a code and a word.
 //!
-//! **Memory per vertex** while sweeping: 4 bytes (its word: link code,
-//! then candidate number or leafward candidate); per candidate 9 bytes
+//! **Memory per vertex** while sweeping: 3 bytes (its word: link code,
+//! then candidate number or leafward candidate, packed in 3 bytes while
+//! the candidates number fewer than 2^23: [`super::leafward`], read and
+//! written through [`Word`]; else 4); per candidate 9 bytes
 //! (union-find, parent, and one byte for the rank, which becomes the
 //! number of children once the sweep is done). The split tree's list of
 //! the candidates' vertices (4 bytes each) is read off its words after
 //! the sweep, once the union-find is gone.
 
+use super::leafward::{self, Leafward, Word, with_words};
 use crate::field::{OrderView, VertexOrder};
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
 use crate::progress::{Cancelled, Progress};
@@ -69,8 +72,9 @@ pub struct SweepTree {
     /// >= 2 at a saddle.
     pub children: Vec<u8>,
     /// Per vertex: `CANDIDATE | c` for candidate `c`; otherwise its
-    /// leafward candidate (see the module documentation).
-    pub leafward: Vec<u32>,
+    /// leafward candidate (see the module documentation); in 3 bytes per
+    /// vertex where the candidates allow it ([`Leafward`]).
+    pub leafward: Leafward,
     /// Per candidate: its vertex (empty in the join tree: the split tree
     /// lists them).
     pub vertex: Vec<u32>,
@@ -131,7 +135,7 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<JoinTree, Cancelled> {
-    let words = link_codes.par_iter().map(|&c| c as u32).collect();
+    let words = Leafward::of_codes(link_codes, leafward::packs(candidates));
     whole(
         mesh,
         values,
@@ -154,7 +158,7 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
     order: &[u32],
     progress: &Progress,
 ) -> Result<SplitTree, Cancelled> {
-    let words = link_codes.par_iter().map(|&c| c as u32).collect();
+    let words = Leafward::of_codes(link_codes, leafward::packs(candidates));
     whole(
         mesh,
         values,
@@ -175,7 +179,7 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
 pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
-    mut words: Vec<u32>,
+    mut words: Leafward,
     candidates: usize,
     join: bool,
     order: OrderView<'_>,
@@ -185,16 +189,16 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     let n = mesh.num_vertices();
     debug_assert_eq!(words.len(), n);
     let block = Block::new(0, n as u32, n, 0);
-    let swept = sweep::<M, O, false>(
-        mesh, values, candidates, join, order, block, &mut words, false, progress, report,
-    )?;
+    let swept = with_words!(&mut words, w => sweep::<M, O, _, false>(
+        mesh, values, candidates, join, order, block, w, false, progress, report,
+    ))?;
     // The split tree lists the candidates' vertices, read off the words
     // once the sweep has let its union-find go: 4 bytes per candidate
     // fewer at the sweeps' peak.
     let vertex = if join {
         Vec::new()
     } else {
-        candidate_vertices(&words, candidates)
+        with_words!(&mut words, w => candidate_vertices(w, candidates))
     };
     Ok(SweepTree {
         parent: swept.parent,
@@ -206,7 +210,7 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
 
 /// The vertex of each of the `candidates` candidates from a sweep's words
 /// (`CANDIDATE | c` at candidate `c`'s vertex), on every core.
-fn candidate_vertices(words: &[u32], candidates: usize) -> Vec<u32> {
+fn candidate_vertices<W: Word>(words: &[W], candidates: usize) -> Vec<u32> {
     let mut vertex = crate::pages::filled(candidates, 0u32);
     let out = crate::pages::DisjointSlots::new(&mut vertex);
     words
@@ -215,6 +219,7 @@ fn candidate_vertices(words: &[u32], candidates: usize) -> Vec<u32> {
         .for_each(|(c, chunk)| {
             let first = (c << 16) as u32;
             for (i, &w) in chunk.iter().enumerate() {
+                let w = w.get();
                 if w & CANDIDATE != 0 {
                     // SAFETY: each candidate number is in exactly one word.
                     unsafe { out.write((w & !CANDIDATE) as usize, first + i as u32) };
@@ -283,7 +288,7 @@ impl Block {
 
     /// The nodes of the block's trees: its candidates and its band, from
     /// the words of the whole mesh while they hold the link codes.
-    pub fn count_nodes(&self, words: &[u32]) -> usize {
+    pub fn count_nodes<W: Word>(&self, words: &[W]) -> usize {
         let (lo, hi) = (self.lo as usize, self.hi as usize);
         let (ilo, ihi) = (
             self.inner_lo as usize,
@@ -292,7 +297,7 @@ impl Block {
         let band = (ilo - lo) + (hi - ihi);
         let candidates: usize = words[ilo..ihi]
             .par_chunks(1 << 16)
-            .map(|c| c.iter().filter(|&&w| is_candidate(w as u8)).count())
+            .map(|c| c.iter().filter(|&&w| is_candidate(w.get() as u8)).count())
             .sum();
         band + candidates
     }
@@ -327,14 +332,14 @@ pub(super) struct BlockTree {
 /// never a union-find node: it costs one read of a neighbour's word, a
 /// `find` in the (on smooth fields, cache-sized) node forest and one write.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
+pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bool>(
     mesh: &M,
     values: &O,
     nodes: usize,
     join: bool,
     order: OrderView<'_>,
     block: Block,
-    leafward: &mut [u32],
+    leafward: &mut [W],
     keep_vertex: bool,
     progress: &Progress,
     report: bool,
@@ -407,7 +412,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
                 // (its code) was prefetched AHEAD vertices ago. (Indices
                 // are relative to the block: the hints only add offsets.)
                 let w = at(i + AHEAD);
-                let cw = leafward[(w - lo) as usize] as u8;
+                let cw = leafward[(w - lo) as usize].get() as u8;
                 if is_candidate(cw) || (BLOCKED && block.in_band(w)) {
                     mesh.prefetch_star(w - lo, leafward);
                 } else {
@@ -419,15 +424,15 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
                 }
             }
             // Not visited yet: the word is v's link code.
-            let full = leafward[(v - lo) as usize] as u8;
+            let full = leafward[(v - lo) as usize].get() as u8;
             let code = if join { full & 0xf } else { full >> 4 };
             let band = BLOCKED && block.in_band(v);
             if !band && !is_candidate(full) {
                 // One component beyond v, reached through one neighbour: v
                 // remembers its last node. Nothing else.
                 let u = mesh.neighbour_at(v, code);
-                let r = find(&mut uf, leafward[(u - lo) as usize] & !CANDIDATE);
-                leafward[(v - lo) as usize] = uf[r as usize] & !ROOT;
+                let r = find(&mut uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
+                leafward[(v - lo) as usize] = W::of(uf[r as usize] & !ROOT);
                 continue;
             }
             let kid = if join {
@@ -437,7 +442,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
                 next += 1;
                 next - 1
             };
-            leafward[(v - lo) as usize] = CANDIDATE | kid;
+            leafward[(v - lo) as usize] = W::of(CANDIDATE | kid);
             if keep_vertex {
                 vertex[kid as usize] = v;
                 if BLOCKED {
@@ -470,7 +475,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, const BLOCKED: bool>(
                 }
             }
             for &u in &reps {
-                let r = find(&mut uf, leafward[(u - lo) as usize] & !CANDIDATE);
+                let r = find(&mut uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
                 if r == root {
                     continue;
                 }
@@ -566,22 +571,52 @@ pub(crate) fn prefetch<T>(data: &[T], i: usize) {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LinkWords {
     /// The join sweep's words.
-    pub join: Vec<u32>,
+    pub join: Leafward,
     /// The split sweep's words.
-    pub split: Vec<u32>,
+    pub split: Leafward,
     /// The candidate nodes among the vertices.
     pub candidates: usize,
 }
 
 /// [`LinkWords`]: [`link_codes`] without an array of codes, 64 Ki
-/// vertices at a time on every core.
+/// vertices at a time on every core. The words start in 3 bytes each
+/// (the candidates are counted as the codes are written) and are widened
+/// in place if the candidates are too many for that ([`leafward`]).
 pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> LinkWords {
-    const CHUNK: usize = 1 << 16;
     let n = mesh.num_vertices();
-    let mut join = crate::pages::filled(n, 0u32);
-    let mut split = crate::pages::filled(n, 0u32);
-    let candidates = join
-        .par_chunks_mut(CHUNK)
+    let packed = leafward::packs(0);
+    let mut join = Leafward::zeroed(n, packed);
+    let mut split = Leafward::zeroed(n, packed);
+    let candidates = match (&mut join, &mut split) {
+        (Leafward::Words(j), Leafward::Words(s)) => seed_words(mesh, values, j, s),
+        (Leafward::Packed { words: j, len }, Leafward::Packed { words: s, .. }) => seed_words(
+            mesh,
+            values,
+            leafward::entries_mut(j, *len),
+            leafward::entries_mut(s, *len),
+        ),
+        _ => unreachable!("both records are made alike"),
+    };
+    if !leafward::packs(candidates) {
+        (join, split) = (join.widen(), split.widen());
+    }
+    LinkWords {
+        join,
+        split,
+        candidates,
+    }
+}
+
+/// Writes every vertex's link code to both sweeps' words; returns the
+/// number of candidates.
+fn seed_words<M: Mesh, O: VertexOrder + ?Sized, W: Word>(
+    mesh: &M,
+    values: &O,
+    join: &mut [W],
+    split: &mut [W],
+) -> usize {
+    const CHUNK: usize = 1 << 16;
+    join.par_chunks_mut(CHUNK)
         .zip(split.par_chunks_mut(CHUNK))
         .enumerate()
         .map(|(c, (j, s))| {
@@ -590,18 +625,13 @@ pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> Lin
             mesh.link_codes_into(values, (c * CHUNK) as u32, codes);
             let mut count = 0;
             for ((j, s), &code) in j.iter_mut().zip(s.iter_mut()).zip(codes.iter()) {
-                *j = code as u32;
-                *s = code as u32;
+                *j = W::of(code as u32);
+                *s = W::of(code as u32);
                 count += is_candidate(code) as usize;
             }
             count
         })
-        .sum();
-    LinkWords {
-        join,
-        split,
-        candidates,
-    }
+        .sum()
 }
 
 /// Summaries of every vertex's upper link (low nibble) and lower link (high
