@@ -11,10 +11,11 @@
 //! its 4-byte order, not 12). The sweeps read and write the entries in
 //! place ([`Word`] for `[u8; 3]`: a candidate flag in bit 23 instead of
 //! bit 31, the same 32-bit word to the sweep); only the placement unpacks
-//! the first record into `vertex_arc`, in place, in its own allocation, so
-//! no record is ever held twice: three words become four, groups of
-//! entries at a time on every core, each wave of groups writing only words
-//! that no group of the same wave still has to read.
+//! the first record, writing `vertex_arc` over it in its own allocation
+//! while the second is given back as it is read ([`combine`]), so no
+//! record is ever held twice: three words become four, groups of entries
+//! at a time on every core, each wave of groups writing only words that
+//! no group of the same wave still has to read.
 //!
 //! The link pass counts the candidates while it writes the codes, so a
 //! record starts packed and is widened in place ([`Leafward::widen`]) if
@@ -22,6 +23,7 @@
 
 use super::sweep::CANDIDATE;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// The flag of a candidate's own entry in a packed record.
 const PACKED_CANDIDATE: u32 = 1 << 23;
@@ -31,6 +33,9 @@ const ENTRY: u32 = (1 << 24) - 1;
 /// start (where the waves would be too small to share out), as a number
 /// of groups.
 const SERIAL_GROUPS: usize = 1 << 12;
+
+/// The most groups [`combine`] writes in one wave (a MiB of words).
+const WAVE_GROUPS: usize = 1 << 16;
 
 /// A sweep's per-vertex word as it is stored: a whole word, or a 3-byte
 /// entry (little end first) whose bit 23 stands for [`CANDIDATE`].
@@ -246,6 +251,105 @@ impl Leafward {
     }
 }
 
+/// One word per vertex, `f(join word, split word)`, from the two sweeps'
+/// records: written in place over `join` (unpacked from the top down, as
+/// [`Leafward::into_words`] does) while `split` is given back from the top
+/// down as it is read. Packed, the two hold 6 bytes per vertex at most
+/// throughout (3 + 1 for the part unpacked, 3 for the part of `split` not
+/// yet read), where unpacking first and reading after held 7.
+pub fn combine(join: Leafward, split: Leafward, f: impl Fn(u32, u32) -> u32 + Sync) -> Vec<u32> {
+    let (mut words, len, mut second) = match (join, split) {
+        (Leafward::Packed { words, len }, Leafward::Packed { words: second, .. }) => {
+            (words, len, second)
+        }
+        (join, split) => {
+            const CHUNK: usize = 1 << 14;
+            let mut words = join.into_words();
+            words
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each_init(Vec::new, |ss, (c, js)| {
+                    ss.resize(js.len(), 0);
+                    split.read(c * CHUNK, ss);
+                    for (j, &s) in js.iter_mut().zip(ss.iter()) {
+                        *j = f(*j, s);
+                    }
+                });
+            return words;
+        }
+    };
+    let group = |j: &[u32], s: &[u32]| -> [u32; 4] {
+        let (j, s) = (unpack4([j[0], j[1], j[2]]), unpack4([s[0], s[1], s[2]]));
+        std::array::from_fn(|k| f(j[k], s[k]))
+    };
+    // As in `into_words`: the last, partial group first, then waves from
+    // the top, each writing above everything it reads. The words beyond
+    // the packed ones are not written before their wave (zeroing them
+    // first would hold the whole fourth word from the start), so the
+    // record is seen as possibly uninitialised words until the end.
+    let whole = len / 4;
+    let last = (whole < len.div_ceil(4)).then(|| {
+        group(
+            &words[3 * whole..3 * whole + 3],
+            &second[3 * whole..3 * whole + 3],
+        )
+    });
+    words.reserve_exact(len.saturating_sub(words.len()));
+    // SAFETY: the allocation holds `len` words (reserved just above);
+    // `MaybeUninit` words may hold anything, and the first `3 *
+    // len.div_ceil(4)` (or `len`, if fewer) are initialised.
+    let all =
+        unsafe { std::slice::from_raw_parts_mut(words.as_mut_ptr() as *mut MaybeUninit<u32>, len) };
+    // SAFETY (for each `assume_init` below): a wave reads words below 3e
+    // <= 4s of a group g < e, which are packed words no wave has written
+    // yet, all initialised.
+    let packed = |w: &[MaybeUninit<u32>]| unsafe {
+        [w[0].assume_init(), w[1].assume_init(), w[2].assume_init()]
+    };
+    // Waves of at most WAVE_GROUPS groups, so that what a wave writes
+    // before the second record's pages it read go back stays small.
+    let mut e = whole;
+    while e > SERIAL_GROUPS {
+        let s = (e * 3)
+            .div_ceil(4)
+            .max(e.saturating_sub(WAVE_GROUPS))
+            .max(SERIAL_GROUPS);
+        let (low, high) = all.split_at_mut(4 * s);
+        high[..4 * (e - s)]
+            .par_chunks_mut(4 << 10)
+            .zip(low[3 * s..3 * e].par_chunks(3 << 10))
+            .zip(second[3 * s..3 * e].par_chunks(3 << 10))
+            .for_each(|((out, j), t)| {
+                let groups = out.chunks_exact_mut(4).zip(j.chunks_exact(3));
+                for ((o, j), t) in groups.zip(t.chunks_exact(3)) {
+                    let four = group(&packed(j), t);
+                    o.iter_mut().zip(four).for_each(|(o, x)| _ = o.write(x));
+                }
+            });
+        // The second record's groups from s up are read: their pages go.
+        second.truncate(3 * s);
+        crate::pages::release_spare(&mut second);
+        e = s;
+    }
+    for g in (0..e).rev() {
+        let four = group(&packed(&all[3 * g..3 * g + 3]), &second[3 * g..3 * g + 3]);
+        all[4 * g..4 * g + 4]
+            .iter_mut()
+            .zip(four)
+            .for_each(|(o, x)| _ = o.write(x));
+    }
+    if let Some(last) = last {
+        all[4 * whole..]
+            .iter_mut()
+            .zip(last)
+            .for_each(|(o, x)| _ = o.write(x));
+    }
+    // SAFETY: every one of the `len` words was written: the waves and the
+    // serial groups cover groups 0..whole, the last group the rest.
+    unsafe { words.set_len(len) };
+    words
+}
+
 /// Four words (candidate numbers below 2^23, `CANDIDATE` or not) as four
 /// 3-byte entries in three words, little end first: what [`Word`] for
 /// `[u8; 3]` writes, four at a time.
@@ -324,6 +428,25 @@ mod tests {
                 prop_assert_eq!(&out[..], &words[start..start + len]);
             }
             prop_assert_eq!(leafward.into_words(), words);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(30))]
+        /// Combining two records in place gives each vertex `f` of its
+        /// two words, packed or not.
+        #[test]
+        fn two_records_combine_vertex_by_vertex(
+            n in 0usize..120_000,
+            wide in any::<bool>(),
+            seed in any::<u64>(),
+        ) {
+            let candidates = if wide { 1u32 << 23 } else { (1 << 23) - 1 };
+            let (a, b) = (record(n, candidates, seed), record(n, candidates, !seed));
+            let f = |x: u32, y: u32| x.rotate_left(7) ^ y.wrapping_mul(3);
+            let combined = combine(pack(&a, candidates as usize), pack(&b, candidates as usize), f);
+            let expect: Vec<u32> = a.iter().zip(&b).map(|(&x, &y)| f(x, y)).collect();
+            prop_assert_eq!(combined, expect);
         }
     }
 

@@ -88,7 +88,7 @@
 //! and given back slab by slab, so that it and the arcs' vertex lists
 //! hold 4 bytes per vertex together, not 8 ([`group_owned`]).
 
-use super::leafward::Leafward;
+use super::leafward::{self, Leafward};
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::OrderView;
@@ -397,43 +397,36 @@ pub fn place(tree: CandidateTree, join_leafward: Leafward, split_leafward: Leafw
         b_of,
         subtree,
     } = tree;
-    const CHUNK: usize = 1 << 14;
-    let mut join_leafward = join_leafward.into_words();
-    join_leafward
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each_init(Vec::new, |ss, (c, js)| {
-            ss.resize(js.len(), 0);
-            split_leafward.read(c * CHUNK, ss);
-            for (j, &s) in js.iter_mut().zip(ss.iter()) {
-                *j = if *j & CANDIDATE != 0 {
-                    let c = *j & !CANDIDATE;
-                    if supernodes.is_node(c) {
-                        NODE_FLAG | supernodes.node(c)
-                    } else {
-                        subtree[c as usize][2]
-                    }
-                } else {
-                    let [lo, hi, above_a] = match a_of[*j as usize] {
-                        NONE => [0, 0, NONE],
-                        a => subtree[a as usize],
-                    };
-                    let tb = subtree[s as usize][0];
-                    if lo <= tb && tb < hi {
-                        match b_of[s as usize] {
-                            NONE => NONE,
-                            b => subtree[b as usize][2],
-                        }
-                    } else {
-                        above_a
-                    }
-                };
+    // Each vertex's place from its two records, written over the first as
+    // the second is given back ([`leafward::combine`]).
+    let vertex_arc = leafward::combine(join_leafward, split_leafward, |j, s| {
+        if j & CANDIDATE != 0 {
+            let c = j & !CANDIDATE;
+            if supernodes.is_node(c) {
+                NODE_FLAG | supernodes.node(c)
+            } else {
+                subtree[c as usize][2]
             }
-        });
+        } else {
+            let [lo, hi, above_a] = match a_of[j as usize] {
+                NONE => [0, 0, NONE],
+                a => subtree[a as usize],
+            };
+            let tb = subtree[s as usize][0];
+            if lo <= tb && tb < hi {
+                match b_of[s as usize] {
+                    NONE => NONE,
+                    b => subtree[b as usize][2],
+                }
+            } else {
+                above_a
+            }
+        }
+    });
     Placed {
         nodes,
         arcs,
-        vertex_arc: join_leafward,
+        vertex_arc,
     }
 }
 

@@ -25,8 +25,9 @@
 //! arcs' vertex lists (an order of ids given back as it is read, so 8 in
 //! all). The records are held in 3 bytes per vertex each from the link
 //! pass to the placement when there are fewer than 2^23 candidates
-//! ([`leafward`]; the first unpacked in place): 6 bytes per vertex through
-//! the sweeps and the merge, 7 at the placement (8 otherwise).
+//! ([`leafward`]): 6 bytes per vertex through the sweeps, the merge and
+//! the placement, which writes `vertex_arc` over the first record as it
+//! gives the second back (8 otherwise).
 //! Candidates add 18 bytes each during the sweeps and about 44 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
@@ -38,8 +39,8 @@
 //! ([`remakes_order`]); the order goes again before the tree's node
 //! adjacency is made. Measured peaks (`flexiso bench`, session 26): about
 //! 10 bytes per vertex on the 8-bit brains (7 % candidates; the grouping),
-//! 11.1 on a smooth float field (the placement; 12.1 before the float sort
-//! and grouping gave back their order), 16 on tooth (31 %, whose finished
+//! 10.5 on a smooth float field (12.1 before the float sort, the placement
+//! and the grouping gave memory back as they went), 16 on tooth (31 %, whose finished
 //! tree alone holds 12.75; the merge), 16.5 on a noisy 1024³ scan (28 %:
 //! too many candidates to pack). [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted. The
@@ -222,16 +223,13 @@ impl From<Cancelled> for BuildError {
 /// let go), `vertex_arc` and the arcs' vertex lists, 8 per vertex. The
 /// records take 8 bytes per vertex, or 6 with fewer than 2^23 candidates
 /// ([`leafward`]: 3 bytes each from the link pass to the placement, which
-/// holds 7 and 36 per candidate).
+/// writes `vertex_arc` over the first as it gives the second back, and
+/// holds 6 and 36 per candidate).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     let (n, k) = (n as u64, candidates as u64);
     let records = if leafward::packs(candidates) { 6 } else { 8 };
     let sweeps = order_bytes + records * n + 18 * k;
-    let merge = if leafward::packs(candidates) {
-        (6 * n + MERGE_BYTES_PER_CANDIDATE * k).max(7 * n + 36 * k)
-    } else {
-        8 * n + MERGE_BYTES_PER_CANDIDATE * k
-    };
+    let merge = records * n + MERGE_BYTES_PER_CANDIDATE * k;
     let held = if order_remade { 0 } else { order_bytes };
     let grouping = order_bytes + 8 * n;
     sweeps.max(merge + held).max(grouping)
@@ -245,12 +243,12 @@ const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 /// 16-bit values, O(n)) and the merge or the placement, without the
 /// order, would still be above the grouping's 8 bytes per vertex beside
 /// it ([`peak_bytes`]). With packed records ([`leafward`]) that takes more
-/// than 1/36 of the vertices as candidates (the placement: 7 bytes per
-/// vertex and 36 per candidate), else 1/64 (the merge, 8 bytes per vertex
-/// and 44 per candidate, is then the peak by at least 2/3 of a byte per
-/// vertex, worth a counting sort).
+/// than 1/22 of the vertices as candidates (the merge: 6 bytes per vertex
+/// and 44 per candidate), else 1/64 (the merge, 8 bytes per vertex and 44
+/// per candidate, is then the peak by at least 2/3 of a byte per vertex,
+/// worth a counting sort).
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    let per = if leafward::packs(candidates) { 36 } else { 64 };
+    let per = if leafward::packs(candidates) { 22 } else { 64 };
     counting && candidates as u64 * per > n as u64
 }
 
@@ -677,23 +675,23 @@ mod tests {
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
-        // candidates), below 1/36 of the vertices the grouping or the
+        // candidates), below 1/22 of the vertices the grouping or the
         // sweeps stay the peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(!remakes_order(n, n / 40, true));
-        assert!(remakes_order(n, n / 30, true));
+        assert!(!remakes_order(n, n / 25, true));
+        assert!(remakes_order(n, n / 20, true));
         let huge = 1usize << 30;
         assert!(remakes_order(huge, huge / 60, true), "unpacked: 1/64");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 30, n / 16, n / 4, n / 2] {
+            for k in [n / 20, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
-            for k in [0, n / 64, n / 40] {
+            for k in [0, n / 64, n / 25] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
             }
