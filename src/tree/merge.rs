@@ -503,16 +503,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
         let count = arc_sizes(vertex_arc, arcs);
         vec![count]
     } else {
-        ranges
-            .par_iter()
-            .map(|range| {
-                let mut count = vec![0u32; arcs];
-                for_each_arc(order, vertex_arc, range.clone(), |_, a| {
-                    count[a as usize] += 1
-                });
-                count
-            })
-            .collect()
+        count_in_ranges(order, vertex_arc, arcs, &ranges)
     };
     let mut offsets = vec![0u32; arcs + 1];
     let mut total = 0u32;
@@ -527,20 +518,10 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     offsets[arcs] = total;
     let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
     let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
-    ranges
-        .into_par_iter()
-        .zip(counts.into_par_iter())
-        .for_each(|(range, mut fill)| {
-            let dst = &dst;
-            for_each_arc(order, vertex_arc, range, |v, a| {
-                let slot = &mut fill[a as usize];
-                // SAFETY: each (chunk, arc) owns a disjoint range of slots
-                // below `total` (the prefix sums above), and writes each
-                // slot once.
-                unsafe { dst.write(*slot as usize, v) };
-                *slot += 1;
-            });
-        });
+    // SAFETY: each (chunk, arc) owns a disjoint range of slots below
+    // `total`, as long as the chunk has vertices on the arc (the prefix
+    // sums above).
+    unsafe { scatter_ranges(order, vertex_arc, ranges, counts, &dst) };
     (offsets, arc_vertices)
 }
 
@@ -606,16 +587,7 @@ fn group_by_arc_consuming(
             .map(|s| s..(s + per).min(hi))
             .collect();
         let view = OrderView::Ids(&order);
-        let mut starts: Vec<Vec<u32>> = ranges
-            .par_iter()
-            .map(|range| {
-                let mut count = vec![0u32; arcs];
-                for_each_arc(view, vertex_arc, range.clone(), |_, a| {
-                    count[a as usize] += 1
-                });
-                count
-            })
-            .collect();
+        let mut starts = count_in_ranges(view, vertex_arc, arcs, &ranges);
         // The last chunk's vertices of an arc take its highest free slots.
         for (a, end) in free_end.iter_mut().enumerate() {
             for c in starts.iter_mut().rev() {
@@ -623,26 +595,63 @@ fn group_by_arc_consuming(
                 c[a] = *end;
             }
         }
-        ranges
-            .into_par_iter()
-            .zip(starts.into_par_iter())
-            .for_each(|(range, mut fill)| {
-                let dst = &dst;
-                for_each_arc(view, vertex_arc, range, |v, a| {
-                    let slot = &mut fill[a as usize];
-                    // SAFETY: each (slab, chunk, arc) owns a disjoint range
-                    // of slots (taken from the arc's free end above), and
-                    // writes each slot once.
-                    unsafe { dst.write(*slot as usize, v) };
-                    *slot += 1;
-                });
-            });
+        // SAFETY: each (slab, chunk, arc) owns a disjoint range of slots,
+        // as long as the chunk has vertices on the arc (taken from the
+        // arc's free end above).
+        unsafe { scatter_ranges(view, vertex_arc, ranges, starts, &dst) };
         order.truncate(lo);
         crate::pages::release_spare(&mut order);
         hi = lo;
     }
     debug_assert!(free_end.iter().zip(&offsets).all(|(e, o)| e == o));
     (offsets, arc_vertices)
+}
+
+/// Per range of positions of the order: how many of its regular vertices
+/// lie on each of the `arcs` superarcs, a range per task.
+fn count_in_ranges(
+    order: OrderView<'_>,
+    vertex_arc: &[u32],
+    arcs: usize,
+    ranges: &[std::ops::Range<usize>],
+) -> Vec<Vec<u32>> {
+    ranges
+        .par_iter()
+        .map(|range| {
+            let mut count = vec![0u32; arcs];
+            for_each_arc(order, vertex_arc, range.clone(), |_, a| {
+                count[a as usize] += 1
+            });
+            count
+        })
+        .collect()
+}
+
+/// Writes the regular vertices of each range of positions of the order to
+/// `dst`, in the order, those on arc `a` from slot `starts[r][a]` on, a
+/// range per task.
+///
+/// # Safety
+/// The slots each (range, arc) writes, from its start on as many as the
+/// range has vertices on the arc, lie in `dst` and are no other's.
+unsafe fn scatter_ranges(
+    order: OrderView<'_>,
+    vertex_arc: &[u32],
+    ranges: Vec<std::ops::Range<usize>>,
+    starts: Vec<Vec<u32>>,
+    dst: &crate::pages::DisjointSlots<'_, u32>,
+) {
+    ranges
+        .into_par_iter()
+        .zip(starts.into_par_iter())
+        .for_each(|(range, mut fill)| {
+            for_each_arc(order, vertex_arc, range, |v, a| {
+                let slot = &mut fill[a as usize];
+                // SAFETY: the caller's (range, arc) slots are its own.
+                unsafe { dst.write(*slot as usize, v) };
+                *slot += 1;
+            });
+        });
 }
 
 /// Calls `f(v, arc)` for each regular vertex `v` at the positions `range`
