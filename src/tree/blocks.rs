@@ -67,7 +67,7 @@
 //! nodes (candidates and bands) cross the wire: a few per cent of the
 //! vertices on smooth fields.
 
-use super::leafward::{self, Leafward, Word, with_words};
+use super::leafward::{self, Word, with_both_words, with_words};
 use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
     union,
@@ -173,22 +173,9 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     }
 
     // 1. Both sweeps of every block, all at once.
-    let trees: Vec<BlockTree> = match (&mut join_words, &mut split_words) {
-        (Leafward::Words(j), Leafward::Words(s)) => {
-            sweep_blocks(mesh, values, order, &blocks, &nodes_in, j, s, progress)
-        }
-        (Leafward::Packed { words: j, len }, Leafward::Packed { words: s, .. }) => sweep_blocks(
-            mesh,
-            values,
-            order,
-            &blocks,
-            &nodes_in,
-            leafward::entries_mut(j, *len),
-            leafward::entries_mut(s, *len),
-            progress,
-        ),
-        _ => unreachable!("both records are made alike"),
-    }?;
+    let trees: Vec<BlockTree> = with_both_words!(&mut join_words, &mut split_words, (j, s) => {
+        sweep_blocks(mesh, values, order, &blocks, &nodes_in, j, s, progress)
+    })?;
     let (join_trees, split_trees) = trees.split_at(blocks.len());
 
     // 2. The nodes in the vertex order (each block's list is sorted: the

@@ -113,6 +113,34 @@ macro_rules! with_words {
 }
 pub(crate) use with_words;
 
+/// [`with_words!`] for two records made alike (both packed or both not):
+/// `$a` and `$b` bound to their entries, of one [`Word`] type.
+macro_rules! with_both_words {
+    ($first:expr, $second:expr, ($a:ident, $b:ident) => $body:expr) => {
+        match ($first, $second) {
+            (
+                $crate::tree::leafward::Leafward::Words(a),
+                $crate::tree::leafward::Leafward::Words(b),
+            ) => {
+                let ($a, $b): (&mut [u32], &mut [u32]) = (a.as_mut_slice(), b.as_mut_slice());
+                $body
+            }
+            (
+                $crate::tree::leafward::Leafward::Packed { words: a, len },
+                $crate::tree::leafward::Leafward::Packed { words: b, .. },
+            ) => {
+                let ($a, $b) = (
+                    $crate::tree::leafward::entries_mut(a, *len),
+                    $crate::tree::leafward::entries_mut(b, *len),
+                );
+                $body
+            }
+            _ => unreachable!("both records are made alike"),
+        }
+    };
+}
+pub(crate) use with_both_words;
+
 /// The `len` 3-byte entries of a packed record's words.
 pub fn entries_mut(words: &mut [u32], len: usize) -> &mut [[u8; 3]] {
     assert!(3 * len <= 4 * words.len());
@@ -190,110 +218,63 @@ impl Leafward {
     /// The record as words, unpacked in place (the allocation grown to a
     /// word per vertex).
     pub fn into_words(self) -> Vec<u32> {
-        let (mut words, len) = match self {
-            Leafward::Words(words) => return words,
-            Leafward::Packed { words, len } => (words, len),
-        };
-        // The last, partial group first (its words are about to be
-        // overwritten), then the whole ones; the record grows within its
-        // capacity (a reallocation could copy it).
-        let whole = len / 4;
-        let last = (whole < len.div_ceil(4)).then(|| {
-            let t = &words[3 * whole..3 * whole + 3];
-            unpack4([t[0], t[1], t[2]])
-        });
-        words.resize(len, 0);
-        // Group g reads words 3g.. and writes 4g..: from the top, a wave
-        // [s, e) with 4s >= 3e writes above everything it reads.
-        let mut e = whole;
-        while e > SERIAL_GROUPS {
-            let s = (e * 3).div_ceil(4).max(SERIAL_GROUPS);
-            let (low, high) = words.split_at_mut(4 * s);
-            high[..4 * (e - s)]
-                .par_chunks_mut(4 << 10)
-                .zip(low[3 * s..3 * e].par_chunks(3 << 10))
-                .for_each(|(out, three)| {
-                    for (o, t) in out.chunks_exact_mut(4).zip(three.chunks_exact(3)) {
-                        o.copy_from_slice(&unpack4([t[0], t[1], t[2]]));
-                    }
-                });
-            e = s;
-        }
-        for g in (0..e).rev() {
-            let three: [u32; 3] = std::array::from_fn(|k| words[3 * g + k]);
-            words[4 * g..4 * g + 4].copy_from_slice(&unpack4(three));
-        }
-        if let Some(last) = last {
-            words[4 * whole..].copy_from_slice(&last[..len - 4 * whole]);
-        }
-        words
-    }
-
-    /// The words of vertices `start..start + out.len()` into `out`;
-    /// `start` a multiple of 4.
-    pub fn read(&self, start: usize, out: &mut [u32]) {
         match self {
-            Leafward::Words(words) => out.copy_from_slice(&words[start..start + out.len()]),
-            Leafward::Packed { words, .. } => {
-                debug_assert_eq!(start % 4, 0);
-                let (g, whole) = (start / 4, out.len() / 4);
-                let mut four = out.chunks_exact_mut(4);
-                for (o, t) in (&mut four).zip(words[3 * g..].chunks_exact(3)) {
-                    o.copy_from_slice(&unpack4([t[0], t[1], t[2]]));
-                }
-                let rest = four.into_remainder();
-                if !rest.is_empty() {
-                    let t = &words[3 * (g + whole)..][..3];
-                    rest.copy_from_slice(&unpack4([t[0], t[1], t[2]])[..rest.len()]);
-                }
-            }
+            Leafward::Words(words) => words,
+            Leafward::Packed { words, len } => unpack_in_place(words, len, None, |j, _| j),
         }
     }
 }
 
 /// One word per vertex, `f(join word, split word)`, from the two sweeps'
 /// records: written in place over `join` (unpacked from the top down, as
-/// [`Leafward::into_words`] does) while `split` is given back from the top
+/// [`Leafward::into_words`] does: [`unpack_in_place`]) while `split` is given back from the top
 /// down as it is read. Packed, the two hold 6 bytes per vertex at most
 /// throughout (3 + 1 for the part unpacked, 3 for the part of `split` not
 /// yet read), where unpacking first and reading after held 7.
 pub fn combine(join: Leafward, split: Leafward, f: impl Fn(u32, u32) -> u32 + Sync) -> Vec<u32> {
-    let (mut words, len, mut second) = match (join, split) {
+    match (join, split) {
         (Leafward::Packed { words, len }, Leafward::Packed { words: second, .. }) => {
-            (words, len, second)
+            unpack_in_place(words, len, Some(second), f)
         }
-        (join, split) => {
-            const CHUNK: usize = 1 << 14;
-            let mut words = join.into_words();
+        (Leafward::Words(mut words), Leafward::Words(second)) => {
             words
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each_init(Vec::new, |ss, (c, js)| {
-                    ss.resize(js.len(), 0);
-                    split.read(c * CHUNK, ss);
-                    for (j, &s) in js.iter_mut().zip(ss.iter()) {
-                        *j = f(*j, s);
-                    }
-                });
-            return words;
+                .par_chunks_mut(1 << 14)
+                .zip(second.par_chunks(1 << 14))
+                .for_each(|(j, s)| j.iter_mut().zip(s).for_each(|(j, &s)| *j = f(*j, s)));
+            words
         }
-    };
-    let group = |j: &[u32], s: &[u32]| -> [u32; 4] {
-        let (j, s) = (unpack4([j[0], j[1], j[2]]), unpack4([s[0], s[1], s[2]]));
+        _ => unreachable!("both records are made alike"),
+    }
+}
+
+/// Group `g` of a packed record, if there is one.
+fn group_of(record: &Option<Vec<u32>>, g: usize) -> Option<&[u32]> {
+    record.as_ref().map(|r| &r[3 * g..3 * g + 3])
+}
+
+/// The packed record `words` of `len` entries unpacked in place, each
+/// entry `j` written as `f(j, s)` with `s` the same vertex's entry of the
+/// packed record `second` (0 without one). Group g reads words 3g.. and
+/// writes 4g..: the last, partial group first, then waves from the top of
+/// at most [`WAVE_GROUPS`] groups, each writing above everything it reads;
+/// after each wave the groups of `second` it read are given back. The
+/// words beyond the packed ones are not written before their wave
+/// (zeroing them first would hold the whole fourth word from the start),
+/// so the record is seen as possibly uninitialised words until the end.
+fn unpack_in_place(
+    mut words: Vec<u32>,
+    len: usize,
+    mut second: Option<Vec<u32>>,
+    f: impl Fn(u32, u32) -> u32 + Sync,
+) -> Vec<u32> {
+    let group = |j: &[u32], s: Option<&[u32]>| -> [u32; 4] {
+        let j = unpack4([j[0], j[1], j[2]]);
+        let s = s.map_or([0; 4], |s| unpack4([s[0], s[1], s[2]]));
         std::array::from_fn(|k| f(j[k], s[k]))
     };
-    // As in `into_words`: the last, partial group first, then waves from
-    // the top, each writing above everything it reads. The words beyond
-    // the packed ones are not written before their wave (zeroing them
-    // first would hold the whole fourth word from the start), so the
-    // record is seen as possibly uninitialised words until the end.
     let whole = len / 4;
-    let last = (whole < len.div_ceil(4)).then(|| {
-        group(
-            &words[3 * whole..3 * whole + 3],
-            &second[3 * whole..3 * whole + 3],
-        )
-    });
+    let last = (whole < len.div_ceil(4))
+        .then(|| group(&words[3 * whole..3 * whole + 3], group_of(&second, whole)));
     words.reserve_exact(len.saturating_sub(words.len()));
     // SAFETY: the allocation holds `len` words (reserved just above);
     // `MaybeUninit` words may hold anything, and the first `3 *
@@ -306,8 +287,6 @@ pub fn combine(join: Leafward, split: Leafward, f: impl Fn(u32, u32) -> u32 + Sy
     let packed = |w: &[MaybeUninit<u32>]| unsafe {
         [w[0].assume_init(), w[1].assume_init(), w[2].assume_init()]
     };
-    // Waves of at most WAVE_GROUPS groups, so that what a wave writes
-    // before the second record's pages it read go back stays small.
     let mut e = whole;
     while e > SERIAL_GROUPS {
         let s = (e * 3)
@@ -315,24 +294,32 @@ pub fn combine(join: Leafward, split: Leafward, f: impl Fn(u32, u32) -> u32 + Sy
             .max(e.saturating_sub(WAVE_GROUPS))
             .max(SERIAL_GROUPS);
         let (low, high) = all.split_at_mut(4 * s);
-        high[..4 * (e - s)]
-            .par_chunks_mut(4 << 10)
-            .zip(low[3 * s..3 * e].par_chunks(3 << 10))
-            .zip(second[3 * s..3 * e].par_chunks(3 << 10))
-            .for_each(|((out, j), t)| {
-                let groups = out.chunks_exact_mut(4).zip(j.chunks_exact(3));
-                for ((o, j), t) in groups.zip(t.chunks_exact(3)) {
-                    let four = group(&packed(j), t);
-                    o.iter_mut().zip(four).for_each(|(o, x)| _ = o.write(x));
-                }
-            });
+        let out = high[..4 * (e - s)].par_chunks_mut(4 << 10);
+        let write = |(out, j): (&mut [MaybeUninit<u32>], &[MaybeUninit<u32>]),
+                     t: Option<&[u32]>| {
+            let groups = out.chunks_exact_mut(4).zip(j.chunks_exact(3)).enumerate();
+            for (i, (o, j)) in groups {
+                let four = group(&packed(j), t.map(|t| &t[3 * i..3 * i + 3]));
+                o.iter_mut().zip(four).for_each(|(o, x)| _ = o.write(x));
+            }
+        };
+        let low = low[3 * s..3 * e].par_chunks(3 << 10);
+        match &second {
+            Some(second) => out
+                .zip(low)
+                .zip(second[3 * s..3 * e].par_chunks(3 << 10))
+                .for_each(|(oj, t)| write(oj, Some(t))),
+            None => out.zip(low).for_each(|oj| write(oj, None)),
+        }
         // The second record's groups from s up are read: their pages go.
-        second.truncate(3 * s);
-        crate::pages::release_spare(&mut second);
+        if let Some(second) = &mut second {
+            second.truncate(3 * s);
+            crate::pages::release_spare(second);
+        }
         e = s;
     }
     for g in (0..e).rev() {
-        let four = group(&packed(&all[3 * g..3 * g + 3]), &second[3 * g..3 * g + 3]);
+        let four = group(&packed(&all[3 * g..3 * g + 3]), group_of(&second, g));
         all[4 * g..4 * g + 4]
             .iter_mut()
             .zip(four)
@@ -423,8 +410,7 @@ mod tests {
             let start = ((at * n as f64) as usize) / 4 * 4;
             for len in [0, 1, 3, 4, 5, 4099] {
                 let len = len.min(n - start);
-                let mut out = vec![0; len];
-                leafward.read(start, &mut out);
+                let out: Vec<u32> = (start..start + len).map(|i| leafward.get(i)).collect();
                 prop_assert_eq!(&out[..], &words[start..start + len]);
             }
             prop_assert_eq!(leafward.into_words(), words);

@@ -46,7 +46,7 @@
 //! the candidates' vertices (4 bytes each) is read off its words after
 //! the sweep, once the union-find is gone.
 
-use super::leafward::{self, Leafward, Word, with_words};
+use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use crate::field::{OrderView, VertexOrder};
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
 use crate::progress::{Cancelled, Progress};
@@ -587,16 +587,8 @@ pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> Lin
     let packed = leafward::packs(0);
     let mut join = Leafward::zeroed(n, packed);
     let mut split = Leafward::zeroed(n, packed);
-    let candidates = match (&mut join, &mut split) {
-        (Leafward::Words(j), Leafward::Words(s)) => seed_words(mesh, values, j, s),
-        (Leafward::Packed { words: j, len }, Leafward::Packed { words: s, .. }) => seed_words(
-            mesh,
-            values,
-            leafward::entries_mut(j, *len),
-            leafward::entries_mut(s, *len),
-        ),
-        _ => unreachable!("both records are made alike"),
-    };
+    let candidates =
+        with_both_words!(&mut join, &mut split, (j, s) => seed_words(mesh, values, j, s));
     if !leafward::packs(candidates) {
         (join, split) = (join.widen(), split.widen());
     }
