@@ -24,7 +24,11 @@ pub use order::{
     vertex_order,
 };
 
+use rayon::prelude::*;
 use thiserror::Error;
+
+/// Values per task of a scan over a field's values.
+const SCAN_CHUNK: usize = 1 << 20;
 
 /// The largest number of vertices the engine accepts (ids are `u32` and the
 /// top bit is reserved).
@@ -241,16 +245,20 @@ impl Values {
     }
 
     /// Count of NaN or infinite values and the index of the first one.
+    /// Parts of the values on every core: a volume of a GiB is read in a
+    /// fraction of a second, not one core's second.
     pub fn non_finite(&self) -> Option<(usize, usize)> {
         fn scan<T: Scalar>(v: &[T]) -> Option<(usize, usize)> {
-            let mut first = None;
-            let mut count = 0;
-            for (i, x) in v.iter().enumerate() {
-                if !x.to_f64().is_finite() {
-                    count += 1;
-                    first.get_or_insert(i);
-                }
-            }
+            let (count, first) = v
+                .par_chunks(SCAN_CHUNK)
+                .enumerate()
+                .map(|(c, part)| {
+                    let bad = |x: &T| !x.to_f64().is_finite();
+                    let count = part.iter().filter(|x| bad(x)).count();
+                    let first = part.iter().position(bad).map(|i| c * SCAN_CHUNK + i);
+                    (count, first)
+                })
+                .reduce(|| (0, None), |(c1, f1), (c2, f2)| (c1 + c2, f1.or(f2)));
             first.map(|f| (count, f))
         }
         match self {
@@ -260,23 +268,28 @@ impl Values {
         }
     }
 
-    /// Smallest and largest value (0, 0 when empty).
+    /// Smallest and largest value (0, 0 when empty), parts of the values on
+    /// every core.
     pub fn range(&self) -> (f64, f64) {
         fn mm<T: Scalar>(v: &[T]) -> (f64, f64) {
-            let mut it = v.iter();
-            let Some(&first) = it.next() else {
-                return (0.0, 0.0);
+            let extremes = |part: &[T]| {
+                let mut it = part.iter();
+                let &first = it.next()?;
+                let (mut lo, mut hi) = (first, first);
+                for &x in it {
+                    if x < lo {
+                        lo = x;
+                    }
+                    if x > hi {
+                        hi = x;
+                    }
+                }
+                Some((lo.to_f64(), hi.to_f64()))
             };
-            let (mut lo, mut hi) = (first, first);
-            for &x in it {
-                if x < lo {
-                    lo = x;
-                }
-                if x > hi {
-                    hi = x;
-                }
-            }
-            (lo.to_f64(), hi.to_f64())
+            v.par_chunks(SCAN_CHUNK)
+                .filter_map(extremes)
+                .reduce_with(|(l1, h1), (l2, h2)| (l1.min(l2), h1.max(h2)))
+                .unwrap_or((0.0, 0.0))
         }
         with_values!(self, v => mm(v))
     }
@@ -462,5 +475,44 @@ impl ScalarField {
     /// Smallest and largest value.
     pub fn range(&self) -> (f64, f64) {
         self.values.range()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(12))]
+        /// The scans over parts of the values on every core find what one
+        /// scan from the start finds: the count and first position of the
+        /// values that are not finite, and the extremes, whichever part of
+        /// the values (past the first) they lie in.
+        #[test]
+        fn scans_in_parts_are_the_scan_from_the_start(
+            len in 0usize..(2 * SCAN_CHUNK + SCAN_CHUNK / 2),
+            bad in proptest::collection::vec((any::<prop::sample::Index>(), 0usize..3), 0..4),
+            seed in any::<u32>(),
+        ) {
+            let mut v: Vec<f32> = (0..len as u32)
+                .map(|i| ((i ^ seed).wrapping_mul(2_654_435_761) >> 8) as f32 - 1e6)
+                .collect();
+            let finite = v.clone();
+            for (at, kind) in &bad {
+                if len > 0 {
+                    v[at.index(len)] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][*kind];
+                }
+            }
+            let expect = {
+                let is_bad: Vec<usize> = (0..len).filter(|&i| !v[i].is_finite()).collect();
+                is_bad.first().map(|&f| (is_bad.len(), f))
+            };
+            prop_assert_eq!(Values::F32(v).non_finite(), expect);
+            let lo = finite.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = finite.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            let expect = if len == 0 { (0.0, 0.0) } else { (lo as f64, hi as f64) };
+            prop_assert_eq!(Values::F32(finite).range(), expect);
+        }
     }
 }

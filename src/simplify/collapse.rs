@@ -81,6 +81,13 @@ impl CollapsedTree {
         collapsed
     }
 
+    /// The number of arcs [`CollapsedTree::new`] leaves, without the region
+    /// summaries (which read every vertex's value): for a report of the
+    /// tree that goes no further.
+    pub fn count_arcs(tree: &ContourTree, field: &ScalarField) -> usize {
+        Self::without_regions(tree, &node_values(tree, field)).num_arcs()
+    }
+
     /// As [`CollapsedTree::new`], with the regions already computed.
     pub fn with_regions(tree: &ContourTree, field: &ScalarField, regions: &ArcRegions) -> Self {
         let mut collapsed = Self::without_regions(tree, &node_values(tree, field));

@@ -563,7 +563,25 @@ fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
 fn group_by_arc_consuming(
     vertex_arc: &[u32],
     arcs: usize,
+    order: Vec<u32>,
+) -> (Vec<u32>, Vec<u32>) {
+    // Where an id and a superarc (or `arcs` for a node) fit in one word
+    // together, the count writes each position's superarc beside its id,
+    // so that the scatter reads the slab in sequence instead of looking
+    // every vertex up again at a scattered place: the smooth fields, whose
+    // superarcs are few.
+    let id_bits = usize::BITS - (order.len().max(2) - 1).leading_zeros();
+    let fits = id_bits < u32::BITS && (arcs as u64) < 1 << (u32::BITS - id_bits);
+    group_by_arc_in_slabs(vertex_arc, arcs, order, fits.then_some(id_bits))
+}
+
+/// [`group_by_arc_consuming`], each slab's superarcs written beside its
+/// ids where `packed` gives the ids' bits.
+fn group_by_arc_in_slabs(
+    vertex_arc: &[u32],
+    arcs: usize,
     mut order: Vec<u32>,
+    packed: Option<u32>,
 ) -> (Vec<u32>, Vec<u32>) {
     let n = order.len();
     let sizes = arc_sizes(vertex_arc, arcs);
@@ -586,8 +604,10 @@ fn group_by_arc_consuming(
             .step_by(per)
             .map(|s| s..(s + per).min(hi))
             .collect();
-        let view = OrderView::Ids(&order);
-        let mut starts = count_in_ranges(view, vertex_arc, arcs, &ranges);
+        let mut starts = match packed {
+            Some(id_bits) => count_and_pack(&mut order[lo..hi], per, vertex_arc, arcs, id_bits),
+            None => count_in_ranges(OrderView::Ids(&order), vertex_arc, arcs, &ranges),
+        };
         // The last chunk's vertices of an arc take its highest free slots.
         for (a, end) in free_end.iter_mut().enumerate() {
             for c in starts.iter_mut().rev() {
@@ -598,7 +618,13 @@ fn group_by_arc_consuming(
         // SAFETY: each (slab, chunk, arc) owns a disjoint range of slots,
         // as long as the chunk has vertices on the arc (taken from the
         // arc's free end above).
-        unsafe { scatter_ranges(view, vertex_arc, ranges, starts, &dst) };
+        match packed {
+            // SAFETY: as above.
+            Some(id_bits) => unsafe { scatter_packed(&order[lo..hi], per, id_bits, starts, &dst) },
+            None => unsafe {
+                scatter_ranges(OrderView::Ids(&order), vertex_arc, ranges, starts, &dst)
+            },
+        }
         order.truncate(lo);
         crate::pages::release_spare(&mut order);
         hi = lo;
@@ -625,6 +651,67 @@ fn count_in_ranges(
             count
         })
         .collect()
+}
+
+/// [`count_in_ranges`] over the chunks of `per` positions of `slab`, which
+/// it rewrites: each id `v` becomes `v | arc << id_bits`, with `arcs` in
+/// place of the superarc of a node (every superarc below `arcs` and every
+/// id below `1 << id_bits`).
+fn count_and_pack(
+    slab: &mut [u32],
+    per: usize,
+    vertex_arc: &[u32],
+    arcs: usize,
+    id_bits: u32,
+) -> Vec<Vec<u32>> {
+    const AHEAD: usize = 16;
+    slab.par_chunks_mut(per)
+        .map(|ids| {
+            let mut count = vec![0u32; arcs];
+            for i in 0..ids.len() {
+                if let Some(&w) = ids.get(i + AHEAD) {
+                    prefetch(vertex_arc, w as usize);
+                }
+                let v = ids[i];
+                let va = vertex_arc[v as usize];
+                let a = if va & NODE_FLAG == 0 {
+                    count[va as usize] += 1;
+                    va
+                } else {
+                    arcs as u32
+                };
+                ids[i] = v | a << id_bits;
+            }
+            count
+        })
+        .collect()
+}
+
+/// [`scatter_ranges`] for a slab that [`count_and_pack`] rewrote, read in
+/// sequence.
+///
+/// # Safety
+/// As for [`scatter_ranges`], with the chunks of `per` positions of `slab`
+/// as the ranges.
+unsafe fn scatter_packed(
+    slab: &[u32],
+    per: usize,
+    id_bits: u32,
+    starts: Vec<Vec<u32>>,
+    dst: &crate::pages::DisjointSlots<'_, u32>,
+) {
+    let id = (1u32 << id_bits) - 1;
+    slab.par_chunks(per)
+        .zip(starts.into_par_iter())
+        .for_each(|(words, mut fill)| {
+            for &w in words {
+                if let Some(slot) = fill.get_mut((w >> id_bits) as usize) {
+                    // SAFETY: the caller's (chunk, arc) slots are its own.
+                    unsafe { dst.write(*slot as usize, w & id) };
+                    *slot += 1;
+                }
+            }
+        });
 }
 
 /// Writes the regular vertices of each range of positions of the order to
@@ -703,6 +790,9 @@ mod tests {
             let whole = group_by_arc(&vertex_arc, arcs, OrderView::Ids(&order));
             let consumed = group_by_arc_consuming(&vertex_arc, arcs, order.clone());
             prop_assert_eq!(&whole, &consumed);
+            // Read back from the order itself, not written beside the ids.
+            let unpacked = group_by_arc_in_slabs(&vertex_arc, arcs, order.clone(), None);
+            prop_assert_eq!(&whole, &unpacked);
             // And it is the grouping: each arc's vertices, in the order.
             let (offsets, verts) = consumed;
             for a in 0..arcs {

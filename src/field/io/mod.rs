@@ -650,23 +650,22 @@ pub(crate) fn finish(
     if sp != spacing.map(f64::abs) {
         warnings.push(format!("spacing {spacing:?} is unusable; using {sp:?}"));
     }
-    if let Some((count, first)) = values.non_finite() {
-        match opts.nan {
-            NanPolicy::Error => {} // ScalarField reports count and position.
-            NanPolicy::Min | NanPolicy::Max => {
-                let Some(fill) = finite_extreme(&values, opts.nan == NanPolicy::Max) else {
-                    return Err(invalid(path, "every value is NaN or infinite"));
-                };
-                replace_non_finite(&mut values, fill);
-                let [x, y] = [dims[0], dims[1]];
-                warnings.push(format!(
-                    "{count} NaN or infinite values (first at x={} y={} z={}) replaced by {fill}",
-                    first % x,
-                    first / x % y,
-                    first / (x * y)
-                ));
-            }
-        }
+    // Under `NanPolicy::Error` the field itself reports count and position
+    // (one scan of the values, not two).
+    if opts.nan != NanPolicy::Error
+        && let Some((count, first)) = values.non_finite()
+    {
+        let Some(fill) = finite_extreme(&values, opts.nan == NanPolicy::Max) else {
+            return Err(invalid(path, "every value is NaN or infinite"));
+        };
+        replace_non_finite(&mut values, fill);
+        let [x, y] = [dims[0], dims[1]];
+        warnings.push(format!(
+            "{count} NaN or infinite values (first at x={} y={} z={}) replaced by {fill}",
+            first % x,
+            first / x % y,
+            first / (x * y)
+        ));
     }
     let field = ScalarField::with_spacing(dims, sp, values).map_err(|error| ReadError::Field {
         path: path.to_owned(),
