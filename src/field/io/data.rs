@@ -176,9 +176,8 @@ pub fn read_binary(
     let size = ty.size();
     let mut v = empty(ty);
     if known {
-        // On huge pages and touched on every core: a volume of a GiB takes
-        // 512 page faults, not 262144.
-        crate::with_values!(&mut v, x => *x = crate::pages::filled(count, Default::default()));
+        // Its pages touched on every core, not one.
+        crate::with_values!(&mut v, x => *x = crate::pages::touched(count, Default::default()));
         let buf = bytes_mut(&mut v);
         let got = read_full(r, buf).map_err(DataError::Io)?;
         if got < buf.len() {
