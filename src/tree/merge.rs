@@ -525,6 +525,10 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     (offsets, arc_vertices)
 }
 
+/// How far ahead in the order the grouping's passes prefetch each
+/// vertex's superarc (the reads are scattered over the volume).
+const READ_AHEAD: usize = 16;
+
 /// Slabs of the order [`group_by_arc_consuming`] reads one after another.
 const SLABS: usize = 8;
 /// Chunks of a slab per thread, each counted and placed on its own.
@@ -664,12 +668,11 @@ fn count_and_pack(
     arcs: usize,
     id_bits: u32,
 ) -> Vec<Vec<u32>> {
-    const AHEAD: usize = 16;
     slab.par_chunks_mut(per)
         .map(|ids| {
             let mut count = vec![0u32; arcs];
             for i in 0..ids.len() {
-                if let Some(&w) = ids.get(i + AHEAD) {
+                if let Some(&w) = ids.get(i + READ_AHEAD) {
                     prefetch(vertex_arc, w as usize);
                 }
                 let v = ids[i];
@@ -750,10 +753,9 @@ fn for_each_arc(
     range: std::ops::Range<usize>,
     mut f: impl FnMut(u32, u32),
 ) {
-    const AHEAD: usize = 16;
     order.for_each_chunk(range, |ids| {
         for (i, &v) in ids.iter().enumerate() {
-            if let Some(&w) = ids.get(i + AHEAD) {
+            if let Some(&w) = ids.get(i + READ_AHEAD) {
                 prefetch(vertex_arc, w as usize);
             }
             let va = vertex_arc[v as usize];
