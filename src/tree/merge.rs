@@ -132,27 +132,21 @@ pub fn merge(
     // Supernodes, in vertex order (counted first: on a noisy scan about
     // half the candidates, so no vector grown by doubling).
     let supernode = Supernodes::new(k, |c| jt_up[c] != 1 || st_down[c] != 1);
-    let supernodes = supernode.count();
-    let mut nodes = Vec::with_capacity(supernodes);
-    for c in 0..k {
-        if supernode.is_node(c as u32) {
-            nodes.push(Node {
-                vertex: candidate_vertex[c],
-                up: jt_up[c] as u32,
-                down: st_down[c] as u32,
-            });
-        }
-    }
-
-    drop(candidate_vertex);
+    let nodes = supernode.gather(|c| Node {
+        vertex: candidate_vertex[c],
+        up: jt_up[c] as u32,
+        down: st_down[c] as u32,
+    });
+    let supernodes = nodes.len();
 
     // Fig. 9 on the candidates; the global minimum (candidate 0) is last.
     // `cut` holds the candidates cut so far, in the order they were cut,
     // at its front, and the leaves waiting to be cut as a stack at its
     // back: each candidate is in one of the two at most once, so they
-    // never meet.
+    // never meet, and no slot is read before it is written. It takes the
+    // vertices' array, which is used up.
     let mut parent = crate::pages::filled(k, NONE);
-    let mut cut = crate::pages::filled(k, 0u32);
+    let mut cut = crate::pages::reused(candidate_vertex, k, 0u32);
     let (mut front, mut back) = (0usize, k);
     for c in 1..k {
         if jt_up[c] + st_down[c] == 1 {
@@ -231,17 +225,18 @@ pub fn merge(
         }
     }
     debug_assert_eq!(ends.len(), supernodes.saturating_sub(1));
-    drop(cut);
     progress.check(0, 1)?;
 
     // A and B from the parents; the second takes the parents themselves.
-    let a_of = chain_tops(crate::pages::copied(Vec::new(), &parent), true);
+    // A's copy of them goes where the cut order was, and B's answers where
+    // A's pointers were: pages already touched, none faulted in afresh.
+    let (a_of, pointers) = chain_tops(crate::pages::copied(cut, &parent), true, Vec::new());
     progress.check(0, 1)?;
-    let b_of = chain_tops(parent, false);
+    let (b_of, _) = chain_tops(parent, false, pointers);
     progress.check(0, 1)?;
 
     let mut arcs: Vec<Superarc> = ends
-        .into_iter()
+        .into_par_iter()
         .map(|(r, c)| {
             let (hi, lo) = if r > c { (r, c) } else { (c, r) };
             Superarc {
@@ -252,26 +247,16 @@ pub fn merge(
         .collect();
     // Superarcs in the tree's canonical order, by (lower, upper), now: the
     // per-vertex arrays are then made in their final form.
-    let mut perm: Vec<u32> = (0..arcs.len() as u32).collect();
-    perm.sort_unstable_by_key(|&a| (arcs[a as usize].lower, arcs[a as usize].upper));
-    let mut new_id = vec![0u32; arcs.len()];
-    for (new, &old) in perm.iter().enumerate() {
-        new_id[old as usize] = new as u32;
-    }
-    drop(perm);
-    for [_, _, l] in subtree.iter_mut().filter(|s| s[2] != NONE) {
-        *l = new_id[*l as usize];
-    }
-    // Each superarc moved to its new place by following the cycles of the
-    // permutation (which leaves `new_id` the identity).
-    for i in 0..arcs.len() {
-        while new_id[i] as usize != i {
-            let j = new_id[i] as usize;
-            arcs.swap(i, j);
-            new_id.swap(i, j);
+    let new_id = canonical_arc_ids(&arcs, &nodes);
+    subtree.par_iter_mut().for_each(|[_, _, l]| {
+        if *l != NONE {
+            *l = new_id[*l as usize];
         }
-    }
+    });
     drop(new_id);
+    // The superarcs themselves in that order: sorted in place on every core
+    // (following the permutation's cycles instead is a cache miss a swap).
+    arcs.par_sort_unstable_by_key(|a| (a.lower, a.upper));
     Ok(CandidateTree {
         nodes,
         arcs,
@@ -292,11 +277,15 @@ struct Supernodes {
 }
 
 impl Supernodes {
-    fn new(k: usize, is_node: impl Fn(usize) -> bool) -> Self {
-        let mut bits = vec![0u64; k.div_ceil(64)];
-        for c in (0..k).filter(|&c| is_node(c)) {
-            bits[c / 64] |= 1 << (c % 64);
-        }
+    fn new(k: usize, is_node: impl Fn(usize) -> bool + Sync) -> Self {
+        let bits: Vec<u64> = (0..k.div_ceil(64))
+            .into_par_iter()
+            .map(|w| {
+                (64 * w..k.min(64 * w + 64))
+                    .filter(|&c| is_node(c))
+                    .fold(0, |bits, c| bits | 1 << (c % 64))
+            })
+            .collect();
         let mut count = 0u32;
         let before = bits
             .iter()
@@ -314,6 +303,23 @@ impl Supernodes {
             + self.bits.last().map_or(0, |w| w.count_ones() as usize)
     }
 
+    /// `f(c)` for every supernode `c`, in candidate order, on every core.
+    fn gather<T: Copy + Default + Send + Sync>(&self, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+        let mut out = crate::pages::filled(self.count(), T::default());
+        let slots = crate::pages::DisjointSlots::new(&mut out);
+        self.bits.par_iter().enumerate().for_each(|(w, &bits)| {
+            let (mut bits, mut i) = (bits, self.before[w] as usize);
+            while bits != 0 {
+                let c = 64 * w + bits.trailing_zeros() as usize;
+                // SAFETY: supernode c's number, i, is the slot of no other.
+                unsafe { slots.write(i, f(c)) };
+                bits &= bits - 1;
+                i += 1;
+            }
+        });
+        out
+    }
+
     #[inline]
     fn is_node(&self, c: u32) -> bool {
         self.bits[c as usize / 64] & (1 << (c % 64)) != 0
@@ -325,6 +331,45 @@ impl Supernodes {
         let (w, b) = (c as usize / 64, c % 64);
         self.before[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()
     }
+}
+
+/// Each superarc's number in the canonical order, by lower end and then
+/// upper end, without a comparison sort: node `i` is the lower end of
+/// `nodes[i].up` superarcs, so counting places each superarc among those of
+/// its lower end, and those few (one per arc up from a saddle) are then
+/// ordered by their upper ends.
+fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node]) -> Vec<u32> {
+    let lower = |a: u32| arcs[a as usize].lower;
+    let upper = |a: u32| arcs[a as usize].upper;
+    let mut next = Vec::with_capacity(nodes.len());
+    let mut first = 0u32;
+    for node in nodes {
+        next.push(first);
+        first += node.up;
+    }
+    assert_eq!(
+        first as usize,
+        arcs.len(),
+        "every superarc goes up from its lower end"
+    );
+    // The superarcs in the canonical order.
+    let mut by_order = crate::pages::filled(arcs.len(), 0u32);
+    for (a, arc) in arcs.iter().enumerate() {
+        let slot = &mut next[arc.lower.0 as usize];
+        by_order[*slot as usize] = a as u32;
+        *slot += 1;
+    }
+    drop(next);
+    by_order
+        .par_chunk_by_mut(|&a, &b| lower(a) == lower(b))
+        .for_each(|same_lower| same_lower.sort_unstable_by_key(|&a| upper(a)));
+    let mut new_id = crate::pages::filled(arcs.len(), 0u32);
+    let slots = crate::pages::DisjointSlots::new(&mut new_id);
+    by_order.par_iter().enumerate().for_each(|(new, &old)| {
+        // SAFETY: `by_order` is a permutation: each old number once.
+        unsafe { slots.write(old as usize, new as u32) };
+    });
+    new_id
 }
 
 /// For every candidate `x` but the root, the last of its ancestors
@@ -339,11 +384,17 @@ impl Supernodes {
 /// compresses the path to it; a top stays in its chain when its parent is
 /// visited later, so the pointers stay valid. The pointers are the
 /// `parent` array it takes (pass a copy to keep the parents): 4 bytes per
-/// candidate beside the answer, and no stack as deep as the tree.
-fn chain_tops(parent: Vec<u32>, lower: bool) -> Vec<u32> {
+/// candidate beside the answer, and no stack as deep as the tree. The
+/// answers are written into `spare` where it is large enough; the
+/// pointers are given back with them, for the caller to reuse.
+fn chain_tops(parent: Vec<u32>, lower: bool, spare: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let k = parent.len();
     let mut up = parent;
-    let mut top = crate::pages::filled(k, NONE);
+    // Every answer but the root's is written below.
+    let mut top = crate::pages::reused(spare, k, NONE);
+    if let Some(root) = top.first_mut() {
+        *root = NONE;
+    }
     for i in 1..k {
         let x = if lower { k - i } else { i } as u32;
         // Visited before x: higher than x for A, lower for B.
@@ -352,7 +403,7 @@ fn chain_tops(parent: Vec<u32>, lower: bool) -> Vec<u32> {
         // A chain up to the root (candidate 0) has nothing beyond it.
         top[x as usize] = if t == 0 { NONE } else { t };
     }
-    top
+    (top, up)
 }
 
 /// Follows `pointer` from `start` while `go_on(node, pointer[node])`
@@ -770,6 +821,41 @@ fn for_each_arc(
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        /// Numbering superarcs by counting their lower ends gives the
+        /// order of a comparison sort by (lower, upper).
+        #[test]
+        fn counting_the_lower_ends_sorts_the_superarcs(
+            nodes in 2u32..400,
+            pairs in prop::collection::vec((any::<u32>(), any::<u32>()), 0..3000),
+        ) {
+            let mut arcs: Vec<Superarc> = pairs
+                .iter()
+                .map(|&(a, b)| (a % nodes, b % nodes))
+                .filter(|&(a, b)| a != b)
+                .map(|(a, b)| Superarc { upper: NodeId(a.max(b)), lower: NodeId(a.min(b)) })
+                .collect();
+            // No two superarcs join the same two nodes; the rest in any order.
+            arcs.sort_unstable_by_key(|a| (a.upper, a.lower));
+            arcs.dedup();
+            arcs.sort_by_key(|a| (a.lower.0 ^ a.upper.0).wrapping_mul(0x9E37_79B9));
+            let mut node = vec![Node::default(); nodes as usize];
+            for arc in &arcs {
+                node[arc.lower.0 as usize].up += 1;
+            }
+            let new_id = canonical_arc_ids(&arcs, &node);
+            let mut placed = vec![None; arcs.len()];
+            for (arc, &id) in arcs.iter().zip(&new_id) {
+                prop_assert!(placed[id as usize].replace(*arc).is_none(), "one arc per number");
+            }
+            let mut sorted = arcs.clone();
+            sorted.sort_unstable_by_key(|a| (a.lower, a.upper));
+            let placed: Vec<Superarc> = placed.into_iter().flatten().collect();
+            prop_assert_eq!(placed, sorted);
+        }
+    }
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(60))]

@@ -73,7 +73,7 @@ pub struct NodeId(pub u32);
 pub struct ArcId(pub u32);
 
 /// A supernode: a critical vertex of the contour tree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Node {
     /// The mesh vertex.
     pub vertex: u32,
