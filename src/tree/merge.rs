@@ -198,7 +198,23 @@ pub fn merge(
     // `tout`. No children lists and no path as deep as the tree.
     let cut_order = &cut[..front];
     let mut subtree = crate::pages::filled(k, [0u32, 1, NONE]);
-    for &x in cut_order {
+    // Both passes read, at scattered places, a candidate's parent and
+    // entry and its parent's entry: fetched ahead from the known order.
+    let ahead = |subtree: &[[u32; 3]], far: Option<&u32>, near: Option<&u32>| {
+        if let Some(&far) = far {
+            prefetch(&parent, far as usize);
+            prefetch(subtree, far as usize);
+        }
+        if let Some(&near) = near {
+            prefetch(subtree, parent[near as usize] as usize);
+        }
+    };
+    for (i, &x) in cut_order.iter().enumerate() {
+        ahead(
+            &subtree,
+            cut_order.get(i + 2 * READ_AHEAD),
+            cut_order.get(i + READ_AHEAD),
+        );
         let size = subtree[x as usize][1];
         subtree[parent[x as usize] as usize][1] += size;
     }
@@ -208,7 +224,9 @@ pub fn merge(
     if k > 0 {
         subtree[0] = [0, 1, NONE];
     }
-    for &x in cut_order.iter().rev() {
+    for (i, &x) in cut_order.iter().enumerate().rev() {
+        let before = |d: usize| i.checked_sub(d).map(|j| &cut_order[j]);
+        ahead(&subtree, before(2 * READ_AHEAD), before(READ_AHEAD));
         let p = parent[x as usize];
         let size = subtree[x as usize][1];
         let tin = subtree[p as usize][1];
