@@ -35,7 +35,12 @@
 //! candidates lists each one after its children (it was a leaf when cut),
 //! so one pass in that order sums the subtree sizes and one in the reverse
 //! order, from the root down, gives each child the next free range inside
-//! its parent's and the label of the edge above it.
+//! its parent's and the label of the edge above it (both passes fetch the
+//! entries they will need a few candidates ahead: the order is known).
+//! The superarcs are then numbered in the tree's canonical order, by lower
+//! end and then upper end, by counting: a node is the lower end of as many
+//! superarcs as it has up ([`canonical_arc_ids`]; on white noise a
+//! comparison sort and the permutation's cycles took half the merge).
 //!
 //! **Placing a vertex that is not a candidate.** Let `v` lie on the edge
 //! `e` between candidates `U` (above) and `L` (below), and let `a` and `b`
