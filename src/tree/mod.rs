@@ -330,7 +330,7 @@ impl ContourTree {
         let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
         let source = OrderSource::Owned(order, counting.then_some(&remake));
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, progress))?;
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, merge::REDUCED_SHARE, progress))?;
         times.sort += sort;
         Ok((tree, times))
     }
@@ -359,16 +359,27 @@ impl ContourTree {
         cuts: &[u32],
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
-        Self::build_from(mesh, values, OrderSource::Borrowed(order), cuts, progress)
+        Self::build_from(
+            mesh,
+            values,
+            OrderSource::Borrowed(order),
+            cuts,
+            merge::REDUCED_SHARE,
+            progress,
+        )
     }
 
     /// [`Self::build_in_blocks`] with the order borrowed or owned: an owned
-    /// order that can be made again may be let go during the merge.
+    /// order that can be made again may be let go during the merge. The
+    /// candidates regular in both trees are reduced before the merge when
+    /// at least one vertex in `reduce_share` is one
+    /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
     fn build_from<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
         values: &O,
         mut source: OrderSource<'_>,
         cuts: &[u32],
+        reduce_share: usize,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let order = source.order();
@@ -408,8 +419,16 @@ impl ContourTree {
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         // Held through the merge in 3 bytes per vertex where they fit.
         let empty = || Leafward::Words(Vec::new());
-        let join_leafward = std::mem::replace(&mut join.0.leafward, empty());
-        let split_leafward = std::mem::replace(&mut split.0.leafward, empty());
+        let mut join_leafward = std::mem::replace(&mut join.0.leafward, empty());
+        let mut split_leafward = std::mem::replace(&mut split.0.leafward, empty());
+        let candidate_vertex = merge::reduce_regular_candidates(
+            &mut join,
+            &mut split,
+            candidate_vertex,
+            &mut join_leafward,
+            &mut split_leafward,
+            reduce_share,
+        );
         if remake.is_some() {
             source.let_go();
         }
@@ -722,6 +741,22 @@ mod tests {
         let order = field.vertex_order();
         let oracle = crate::with_values!(field.values(), v => vertex_merge::build(&field.mesh(), v.as_slice(), &order));
         assert_eq!(parts(&fast), parts(&oracle), "dims {dims:?}");
+        // The candidates regular in both trees reduced before the merge
+        // whenever there is one, and never: the same tree.
+        let mesh = field.mesh();
+        let cuts = blocks::even_cuts(field.len(), 1);
+        for share in [usize::MAX, 0] {
+            let (tree, _) = crate::with_values!(field.values(), v => ContourTree::build_from(
+                &mesh,
+                v.as_slice(),
+                OrderSource::Borrowed(&order),
+                &cuts,
+                share,
+                &Progress::new(),
+            ))
+            .expect("tree");
+            assert_eq!(parts(&tree), parts(&oracle), "dims {dims:?}, share {share}");
+        }
     }
 
     fn grid(levels: u8, max: usize) -> impl Strategy<Value = ([usize; 3], Vec<u8>)> {
