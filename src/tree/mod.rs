@@ -31,7 +31,11 @@
 //! Candidates add 18 bytes each during the sweeps and about 44 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
-//! where half the vertices are candidates. So when the order is cheap to
+//! where half the vertices are candidates. There about half the
+//! candidates are regular in both trees and are reduced before the merge
+//! ([`merge::reduce_regular_candidates`]): the merge then holds 44 bytes
+//! per supernode, and the reduction 14 per candidate and 8 per supernode.
+//! So when the order is cheap to
 //! make again (8- and 16-bit values: a counting sort in O(n), most scans)
 //! and the candidates are many, [`ContourTree::from_field`] lets the order
 //! go before the merge and sorts again after the placement, once the
@@ -40,10 +44,14 @@
 //! adjacency is made. Measured peaks (`flexiso bench`, session 26): about
 //! 10 bytes per vertex on the 8-bit brains (7 % candidates; the grouping),
 //! 10.5 on a smooth float field (12.1 before the float sort, the placement
-//! and the grouping gave memory back as they went), 16 on tooth (31 %, whose finished
-//! tree alone holds 12.75; the merge), 16.5 on a noisy 1024³ scan (28 %:
-//! too many candidates to pack). [`check_memory`] refuses a
-//! build that would not fit as soon as the candidates are counted. The
+//! and the grouping gave memory back as they went). With the reduction
+//! (session 29): tooth 15.4 sampled (31 %; the grouping and the finished
+//! tree, 14.1, where the merge held 17.5 before), a noisy 1024³ scan
+//! 13.8 (28 %, too many candidates to pack; the sweeps, where the merge
+//! held 16.5), white noise 23.4 (29.5). [`check_memory`] refuses a
+//! build that would not fit as soon as the candidates are counted, with
+//! half of them taken for supernodes, and [`check_merge_memory`] again
+//! with their real number once the sweeps are done. The
 //! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
 //! O(supernodes).
 
@@ -185,8 +193,8 @@ pub enum BuildError {
     /// The engine's arrays would not fit in the memory left.
     #[error(
         "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
-         ({candidates} candidate nodes, {}% of the vertices: each costs about {} bytes at the merge), \
-         but only {} MiB are left",
+         ({candidates} candidate nodes, {}% of the vertices: each costs 18 bytes in the sweeps and up \
+         to {} at the merge), but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
         MERGE_BYTES_PER_CANDIDATE,
@@ -214,28 +222,61 @@ impl From<Cancelled> for BuildError {
 /// Peak bytes the engine holds beyond the values for `n` vertices of
 /// which `candidates` are candidate nodes (the module doc's account), with
 /// an order of `order_bytes` (about 1 per vertex packed for 8-bit values,
-/// else 4: [`crate::field::order_bytes`]): the order, the two sweeps'
-/// records and 18 per candidate while sweeping; then the order unless it
-/// is let go (`order_remade`, see [`remakes_order`]) and, at the merge,
-/// the records and 44 per candidate (its tables and the tree it builds;
-/// fitted to the peaks measured on tooth, engine and colin27_ch2, within
-/// 10 %, above all three); at the grouping the order (made again if it was
-/// let go), `vertex_arc` and the arcs' vertex lists, 8 per vertex. The
-/// records take 8 bytes per vertex, or 6 with fewer than 2^23 candidates
-/// ([`leafward`]: 3 bytes each from the link pass to the placement, which
-/// writes `vertex_arc` over the first as it gives the second back, and
-/// holds 6 and 36 per candidate).
+/// else 4: [`crate::field::order_bytes`]), before the sweeps tell how many
+/// of the candidates are supernodes: half of them, as on every scan
+/// measured (44-50 %; [`check_merge_memory`] checks again with the real
+/// number). The order, the two sweeps' records and 18 per candidate while
+/// sweeping; then the order unless it is let go (`order_remade`, see
+/// [`remakes_order`]) and, at the merge, the records and the candidates'
+/// tables ([`merge_table_bytes`]); at the grouping the order (made again if
+/// it was let go), `vertex_arc` and the arcs' vertex lists, 8 per vertex.
+/// The records take 8 bytes per vertex, or 6 with fewer than 2^23
+/// candidates ([`leafward`]: 3 bytes each from the link pass to the
+/// placement, which writes `vertex_arc` over the first as it gives the
+/// second back).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
-    let (n, k) = (n as u64, candidates as u64);
-    let records = if leafward::packs(candidates) { 6 } else { 8 };
-    let sweeps = order_bytes + records * n + 18 * k;
-    let merge = records * n + MERGE_BYTES_PER_CANDIDATE * k;
+    peak_bytes_of(n, candidates, candidates / 2, order_bytes, order_remade)
+}
+
+/// [`peak_bytes`] with the number of supernodes known.
+fn peak_bytes_of(
+    n: usize,
+    candidates: usize,
+    supernodes: usize,
+    order_bytes: u64,
+    order_remade: bool,
+) -> u64 {
+    let records = records_bytes(candidates) * n as u64;
+    let sweeps = order_bytes + records + 18 * candidates as u64;
+    let merge = records + merge_table_bytes(n, candidates, supernodes);
     let held = if order_remade { 0 } else { order_bytes };
-    let grouping = order_bytes + 8 * n;
+    let grouping = order_bytes + 8 * n as u64;
     sweeps.max(merge + held).max(grouping)
 }
 
-/// What a candidate node costs at the merge's peak (see [`peak_bytes`]).
+/// The two records' bytes per vertex: 6 packed, else 8 ([`leafward`]).
+fn records_bytes(candidates: usize) -> u64 {
+    if leafward::packs(candidates) { 6 } else { 8 }
+}
+
+/// What the candidates' tables hold at the merge's peak: 44 bytes per
+/// candidate (its tables and the tree it builds; fitted to the peaks
+/// measured on tooth, engine and colin27_ch2, within 10 %, above all
+/// three), or, where the candidates regular in both trees are reduced
+/// first ([`merge::reduce_regular_candidates`]), the larger of the
+/// reduction's 14 per candidate and 8 per supernode and the merge's 44 per
+/// supernode.
+fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
+    let (k, s) = (candidates as u64, supernodes as u64);
+    if merge::reduces(n, candidates, supernodes, merge::REDUCED_SHARE) {
+        (14 * k + 8 * s).max(MERGE_BYTES_PER_CANDIDATE * s)
+    } else {
+        MERGE_BYTES_PER_CANDIDATE * k
+    }
+}
+
+/// What a candidate node costs at the merge's peak (see
+/// [`merge_table_bytes`]).
 const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 
 /// True when a build lets the vertex order go during the merge and sorts
@@ -265,11 +306,40 @@ pub fn check_memory(
     available: u64,
 ) -> Result<(), BuildError> {
     let needed = peak_bytes(n, candidates, order_bytes, order_remade);
-    let records = if leafward::packs(candidates) { 6 } else { 8 };
-    let available = available.saturating_add(order_bytes + records * n as u64);
+    let held = order_bytes + records_bytes(candidates) * n as u64;
+    refuse_beyond(n, candidates, needed, available.saturating_add(held))
+}
+
+/// [`check_memory`] again once the sweeps are done and the `supernodes`
+/// are known: what is left to build (the merge and the grouping) against
+/// what is `available` now plus what the build holds already (the order
+/// unless it is let go, the records, and 14 bytes per candidate: both
+/// trees' parents and child counts, and the candidates' vertices).
+pub fn check_merge_memory(
+    n: usize,
+    candidates: usize,
+    supernodes: usize,
+    order_bytes: u64,
+    order_remade: bool,
+    available: u64,
+) -> Result<(), BuildError> {
+    let records = records_bytes(candidates) * n as u64;
+    let kept = if order_remade { 0 } else { order_bytes };
+    let merge = records + merge_table_bytes(n, candidates, supernodes) + kept;
+    let needed = merge.max(order_bytes + 8 * n as u64);
+    let held = order_bytes + records + 14 * candidates as u64;
+    refuse_beyond(n, candidates, needed, available.saturating_add(held))
+}
+
+fn refuse_beyond(
+    vertices: usize,
+    candidates: usize,
+    needed: u64,
+    available: u64,
+) -> Result<(), BuildError> {
     if needed > available {
         return Err(BuildError::OutOfMemory {
-            vertices: n,
+            vertices,
             candidates,
             needed,
             available,
@@ -414,6 +484,11 @@ impl ContourTree {
         times.join = tj;
         times.split = ts;
         times.sweeps = t.elapsed();
+        if let Some(available) = crate::field::io::available_memory() {
+            let supernodes = merge::count_supernodes(&join, &split);
+            let remade = remake.is_some();
+            check_merge_memory(n, candidates, supernodes, order_bytes, remade, available)?;
+        }
         progress.stage("merge");
         let t = Instant::now();
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
@@ -653,14 +728,17 @@ mod tests {
         let order = 2 * n as u64;
         // A scan or smooth field (2 % candidates): 10.9 bytes per vertex.
         assert!(check_memory(n, n / 50, order, false, 12 * gib).is_ok());
-        // The same volume noisy (28 % candidates): with the order let go
-        // and remade, 20.3 bytes per vertex fit on a 24 GiB machine (12
-        // GiB left beside the 10 already held); held through the merge,
-        // 22.3 do not fit in 22.
+        // The same volume noisy (28 % candidates, half of them supernodes,
+        // so the other 14 % are reduced before the merge): the sweeps'
+        // 15.04 bytes per vertex fit on a 24 GiB machine with the order let
+        // go and remade (5.04 GiB left beside the 10 already held), not
+        // with 5; held through the merge, the merge's 16.16 need 6.16.
         let noisy = n * 28 / 100;
         assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, order, true, 10 * gib).is_err());
-        let e = check_memory(n, noisy, order, false, 12 * gib).expect_err("refused");
+        assert!(check_memory(n, noisy, order, true, 5050 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, true, 5 * gib).is_err());
+        assert!(check_memory(n, noisy, order, false, 6170 * (gib / 1000)).is_ok());
+        let e = check_memory(n, noisy, order, false, 6 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
@@ -668,15 +746,22 @@ mod tests {
             panic!("refused for memory")
         };
         assert_eq!(needed, peak_bytes(n, noisy, order, false));
-        assert_eq!(available, 12 * gib + 10 * n as u64);
-        assert!(
-            needed > 22 * gib,
-            "the merge's 44 bytes per candidate dominate"
-        );
+        assert_eq!(available, 6 * gib + 10 * n as u64);
+        assert_eq!(needed, peak_bytes_of(n, noisy, noisy / 2, order, false));
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
-        assert!(message.contains("about 44 bytes"), "{message}");
+        assert!(message.contains("up to 44"), "{message}");
+        // Once the sweeps tell the supernodes: 8 % (the noisy 1024³ scan
+        // of the README) are reduced to and the merge needs no more than
+        // the sweeps held; 20 % are not, and the merge on all candidates
+        // needs 20.32 bytes per vertex, 6.4 GiB beyond the 13.92 held.
+        let (few, many) = (n * 8 / 100, n * 20 / 100);
+        assert!(check_merge_memory(n, noisy, few, order, true, 0).is_ok());
+        assert!(check_merge_memory(n, noisy, many, order, true, 6500 * (gib / 1000)).is_ok());
+        assert!(check_merge_memory(n, noisy, many, order, true, 6 * gib).is_err());
+        // Held through the merge, the order needs its 2 more.
+        assert!(check_merge_memory(n, noisy, many, order, false, 8 * gib).is_err());
         // Exactly at the limit is allowed, a byte more is not.
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * 1000;

@@ -66,8 +66,9 @@ pub(crate) use self::check_volume_size as check_dims;
 /// on top of the values themselves (vertex order, the sweeps' word per
 /// vertex, then the augmented tree). The tree module owns the real figure
 /// (`crate::tree`'s module doc): the order (about 1 byte for 8-bit values,
-/// else 4) and 8, plus about 44 per *candidate node* at the merge: 9-12 on
-/// smooth fields and 8-bit brains, more on noisy data (tooth 22).
+/// else 4) and 8, plus 18 per *candidate node* in the sweeps and up to 44
+/// at the merge: 9-12 on smooth fields and 8-bit brains, more on noisy
+/// data (tooth 15, white noise 23).
 /// The readers check this a priori figure before reading; `flexiso info`
 /// counts the candidates and quotes `crate::tree::peak_bytes`, and the
 /// engine refuses a build that would not fit once it knows them.
