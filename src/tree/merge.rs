@@ -154,7 +154,7 @@ pub fn merge(
 
     // Supernodes, in vertex order (counted first: on a noisy scan about
     // half the candidates, so no vector grown by doubling).
-    let supernode = Supernodes::new(k, |c| jt_up[c] != 1 || st_down[c] != 1);
+    let supernode = Supernodes::new(k, |c| is_supernode(jt_up[c], st_down[c]));
     let nodes = supernode.gather(|c| Node {
         vertex: candidate_vertex[c],
         up: jt_up[c] as u32,
@@ -340,7 +340,7 @@ pub fn reduce_regular_candidates(
     share: usize,
 ) -> Vec<u32> {
     let k = candidate_vertex.len();
-    let kept = Supernodes::new(k, |c| join.0.children[c] != 1 || split.0.children[c] != 1);
+    let kept = Supernodes::new(k, |c| is_supernode(join.0.children[c], split.0.children[c]));
     if !reduces(join_leafward.len(), k, kept.count(), share) {
         return candidate_vertex;
     }
@@ -375,11 +375,18 @@ pub(super) fn reduces(n: usize, k: usize, s: usize, share: usize) -> bool {
     (k - s).saturating_mul(share) >= n
 }
 
-/// The supernodes: the candidates with other than one child in either tree.
+/// True for a candidate with `up` children in the join tree and `down` in
+/// the split tree that is a supernode: other than one child in either.
+#[inline]
+fn is_supernode(up: u8, down: u8) -> bool {
+    up != 1 || down != 1
+}
+
+/// The supernodes among the candidates ([`is_supernode`]).
 pub(super) fn count_supernodes(join: &JoinTree, split: &SplitTree) -> usize {
     (join.0.children.par_iter())
         .zip(&split.0.children)
-        .filter(|&(&j, &s)| j != 1 || s != 1)
+        .filter(|&(&up, &down)| is_supernode(up, down))
         .count()
 }
 
