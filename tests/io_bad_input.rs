@@ -227,7 +227,7 @@ fn volumes_beyond_available_memory_are_refused_with_the_numbers() {
         "{m}"
     );
     // With the machine's real memory: refused either for memory or, on a
-    // machine with more than 34 GiB free, for the missing data. Never read.
+    // machine with more than 20 GiB free, for the missing data. Never read.
     let m = fails(&p);
     assert!(m.contains("MiB") || m.contains("truncated"), "{m}");
 }
