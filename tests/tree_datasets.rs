@@ -163,7 +163,7 @@ fn check_dataset(name: &str) {
         .chain((1..=12).map(|k| (n as u64 * k / 13) as u32));
     for v in sample {
         let (up, down) = match tree.place(v) {
-            VertexPlace::Node(id) => (tree.node(id).up, tree.node(id).down),
+            VertexPlace::Node(id) => (tree.node(id).up.into(), tree.node(id).down.into()),
             VertexPlace::Arc(_) => (1, 1),
         };
         assert_eq!(

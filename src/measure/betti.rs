@@ -36,7 +36,7 @@
 use crate::field::Isovalue;
 use crate::field::ScalarField;
 use crate::mesh::{EDGE_OFFSETS, Mesh};
-use crate::tree::{ArcId, ContourTree};
+use crate::tree::{ArcId, ContourTree, Node};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
@@ -229,7 +229,7 @@ impl ContourTopology {
         // up) + (LS - US)_i; when one arc is left at i it balances S_i.
         let nodes = tree.nodes();
         let mut sum: Vec<(i64, i64)> = node_delta;
-        let mut degree: Vec<u32> = nodes.iter().map(|n| n.up + n.down).collect();
+        let mut degree: Vec<u32> = nodes.iter().map(Node::degree).collect();
         let mut bottom: Vec<Option<(i64, i64)>> = vec![None; tree.arcs().len()];
         let mut queue: Vec<u32> = (0..nodes.len() as u32)
             .filter(|&i| degree[i as usize] == 1)

@@ -157,8 +157,8 @@ pub fn merge(
     let supernode = Supernodes::new(k, |c| is_supernode(jt_up[c], st_down[c]));
     let nodes = supernode.gather(|c| Node {
         vertex: candidate_vertex[c],
-        up: jt_up[c] as u32,
-        down: st_down[c] as u32,
+        up: jt_up[c].into(),
+        down: st_down[c].into(),
     });
     let supernodes = nodes.len();
 
@@ -501,7 +501,7 @@ fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node]) -> Vec<u32> {
     let mut first = 0u32;
     for node in nodes {
         next.push(first);
-        first += node.up;
+        first += u32::from(node.up);
     }
     assert_eq!(
         first as usize,

@@ -85,10 +85,11 @@ pub struct ArcId(pub u32);
 pub struct Node {
     /// The mesh vertex.
     pub vertex: u32,
-    /// Number of superarcs going up (0 at a maximum, >= 2 at a join).
-    pub up: u32,
+    /// Number of superarcs going up (0 at a maximum, >= 2 at a join; at
+    /// most the pieces of a vertex's upper link, 7 in a Freudenthal grid).
+    pub up: u16,
     /// Number of superarcs going down (0 at a minimum, >= 2 at a split).
-    pub down: u32,
+    pub down: u16,
 }
 
 /// What kind of critical point a node is.
@@ -109,7 +110,16 @@ pub enum NodeKind {
     Regular,
 }
 
+/// Why a node's degree fits [`Node`]'s 16 bits: it is at most the pieces
+/// of a vertex's link.
+pub(crate) const DEGREE_FITS: &str = "a node's degree is at most its link's pieces";
+
 impl Node {
+    /// Number of superarcs at the node.
+    pub fn degree(&self) -> u32 {
+        u32::from(self.up) + u32::from(self.down)
+    }
+
     /// The kind of critical point.
     pub fn kind(&self) -> NodeKind {
         match (self.up, self.down) {
@@ -578,13 +588,13 @@ impl ContourTree {
         // Node adjacency: up arcs (where the node is the lower end) first.
         let mut node_offsets = vec![0u32; nodes.len() + 1];
         for (i, n) in nodes.iter().enumerate() {
-            node_offsets[i + 1] = node_offsets[i] + n.up + n.down;
+            node_offsets[i + 1] = node_offsets[i] + n.degree();
         }
         let mut fill_up: Vec<u32> = node_offsets[..nodes.len()].to_vec();
         let mut fill_down: Vec<u32> = nodes
             .iter()
             .enumerate()
-            .map(|(i, n)| node_offsets[i] + n.up)
+            .map(|(i, n)| node_offsets[i] + u32::from(n.up))
             .collect();
         let mut node_arcs = vec![ArcId(0); node_offsets[nodes.len()] as usize];
         for (a, arc) in sorted_arcs.iter().enumerate() {

@@ -165,8 +165,8 @@ pub fn merge(
             vertex_arc[v as usize] = NODE_FLAG | nodes.len() as u32;
             nodes.push(Node {
                 vertex: v,
-                up: up as u32,
-                down: down as u32,
+                up: up.into(),
+                down: down.into(),
             });
         }
     }

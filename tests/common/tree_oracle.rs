@@ -301,12 +301,12 @@ pub fn check_against_oracles(field: &ScalarField, tree: &ContourTree) {
             VertexPlace::Node(flexiso::tree::NodeId(i as u32))
         );
         assert_eq!(
-            tree.up_arcs(flexiso::tree::NodeId(i as u32)).len() as u32,
-            node.up
+            tree.up_arcs(flexiso::tree::NodeId(i as u32)).len(),
+            usize::from(node.up)
         );
         assert_eq!(
-            tree.down_arcs(flexiso::tree::NodeId(i as u32)).len() as u32,
-            node.down
+            tree.down_arcs(flexiso::tree::NodeId(i as u32)).len(),
+            usize::from(node.down)
         );
     }
 
@@ -347,7 +347,7 @@ pub fn check_against_oracles(field: &ScalarField, tree: &ContourTree) {
     }
     for v in 0..n as u32 {
         let (up, down) = match tree.place(v) {
-            VertexPlace::Node(id) => (tree.node(id).up, tree.node(id).down),
+            VertexPlace::Node(id) => (tree.node(id).up.into(), tree.node(id).down.into()),
             VertexPlace::Arc(_) => (1, 1),
         };
         assert_eq!(

@@ -98,7 +98,7 @@ pub mod heap;
 pub mod paint;
 
 use super::merge::{NODE_FLAG, climb};
-use super::{ContourTree, Node, NodeId, Superarc};
+use super::{ContourTree, DEGREE_FITS, Node, NodeId, Superarc};
 use crate::field::ScalarField;
 use crate::mesh::{FreudenthalGrid, Mesh};
 use crate::progress::{Cancelled, Progress};
@@ -414,8 +414,8 @@ pub fn build<O: CountingOrder + ?Sized>(
             node_of[i as usize] = id as u32;
             Node {
                 vertex: critical[i as usize],
-                up: up_degree[i as usize],
-                down: down_degree[i as usize],
+                up: up_degree[i as usize].try_into().expect(DEGREE_FITS),
+                down: down_degree[i as usize].try_into().expect(DEGREE_FITS),
             }
         })
         .collect();
