@@ -92,10 +92,10 @@
 //! candidates are fewer than 2^23, else 8) and, at the merge's peak
 //! (the chains), 24 per candidate (the parents, the records, the chain
 //! pointers and answers, one bit for "is a supernode" with a count per 64
-//! in place of a table of supernode numbers) plus 20 per supernode (the
-//! supernodes and superarcs, allocated at their exact size). About half
-//! the candidates of a scan are supernodes: 34 per candidate by this
-//! count, 37-41 measured on tooth, engine and colin27_ch2 (56 with the
+//! in place of a table of supernode numbers) plus 16 per supernode (the
+//! supernodes, with 16-bit degrees, and the superarcs, 8 bytes each,
+//! allocated at their exact size). About half the candidates of a scan
+//! are supernodes: 32 per candidate by this count (34 with 32-bit degrees), 37-41 measured on tooth, engine and colin27_ch2 (56 with the
 //! depth-first pass and a table of supernode numbers). The cut order
 //! shares one array with the stack of leaves waiting to be cut. Where the
 //! reduction runs, the merge's candidates are the supernodes (44 per

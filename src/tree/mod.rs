@@ -45,10 +45,11 @@
 //! 10 bytes per vertex on the 8-bit brains (7 % candidates; the grouping),
 //! 10.5 on a smooth float field (12.1 before the float sort, the placement
 //! and the grouping gave memory back as they went). With the reduction
-//! (session 29): tooth 15.4 sampled (31 %; the grouping and the finished
-//! tree, 14.1, where the merge held 17.5 before), a noisy 1024³ scan
+//! (session 29): tooth 14.9 sampled (31 %; the grouping, beside the sweeps
+//! at 14.4 and the finished tree at 13.5, where the merge held 17.5
+//! before), a noisy 1024³ scan
 //! 13.8 (28 %, too many candidates to pack; the sweeps, where the merge
-//! held 16.5), white noise 23.4 (29.5). [`check_memory`] refuses a
+//! held 16.5), white noise 22.3 (29.5). [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted, with
 //! half of them taken for supernodes, and [`check_merge_memory`] again
 //! with their real number once the sweeps are done. The
