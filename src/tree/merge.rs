@@ -95,7 +95,8 @@
 //! in place of a table of supernode numbers) plus 16 per supernode (the
 //! supernodes, with 16-bit degrees, and the superarcs, 8 bytes each,
 //! allocated at their exact size). About half the candidates of a scan
-//! are supernodes: 32 per candidate by this count (34 with 32-bit degrees), 37-41 measured on tooth, engine and colin27_ch2 (56 with the
+//! are supernodes: 32 per candidate by this count (34 with 32-bit
+//! degrees), 37-41 measured on tooth, engine and colin27_ch2 (56 with the
 //! depth-first pass and a table of supernode numbers). The cut order
 //! shares one array with the stack of leaves waiting to be cut. Where the
 //! reduction runs, the merge's candidates are the supernodes (44 per
@@ -138,13 +139,15 @@ pub struct CandidateTree {
 }
 
 /// Merges the join and split trees (see the module documentation).
-/// `candidate_vertex` lists the candidates' vertices, ascending.
+/// `candidate_vertex` lists the candidates' vertices, ascending, and
+/// `supernode` which of them are supernodes ([`Supernodes::of_trees`]).
 /// Arrays are dropped as soon as they are used up: on white noise about
 /// half the vertices are candidates.
 pub fn merge(
     join: JoinTree,
     split: SplitTree,
     candidate_vertex: Vec<u32>,
+    supernode: Supernodes,
     progress: &Progress,
 ) -> Result<CandidateTree, Cancelled> {
     let k = candidate_vertex.len();
@@ -154,7 +157,7 @@ pub fn merge(
 
     // Supernodes, in vertex order (counted first: on a noisy scan about
     // half the candidates, so no vector grown by doubling).
-    let supernode = Supernodes::new(k, |c| is_supernode(jt_up[c], st_down[c]));
+    debug_assert_eq!(supernode.bits.len(), k.div_ceil(64));
     let nodes = supernode.gather(|c| Node {
         vertex: candidate_vertex[c],
         up: jt_up[c].into(),
@@ -328,21 +331,23 @@ pub fn merge(
 /// is the supernodes' size: 44 bytes per supernode at its peak instead of
 /// 44 per candidate. This step holds 14 bytes per candidate and 8 per
 /// supernode. It runs when at least one vertex in `share` is a candidate
-/// to reduce ([`REDUCED_SHARE`]: where it lowers the peak). Returns the
-/// supernodes' vertices, or `candidate_vertex` unchanged when it does not
-/// run.
+/// to reduce ([`REDUCED_SHARE`]: where it lowers the peak). Takes the
+/// supernodes among the candidates (`kept`, [`Supernodes::of_trees`]) and
+/// returns the candidates' vertices and supernodes after it: the
+/// supernodes' vertices, all of them supernodes, or `candidate_vertex` and
+/// `kept` unchanged when it does not run.
 pub fn reduce_regular_candidates(
     join: &mut JoinTree,
     split: &mut SplitTree,
     candidate_vertex: Vec<u32>,
+    kept: Supernodes,
     join_leafward: &mut Leafward,
     split_leafward: &mut Leafward,
     share: usize,
-) -> Vec<u32> {
+) -> (Vec<u32>, Supernodes) {
     let k = candidate_vertex.len();
-    let kept = Supernodes::new(k, |c| is_supernode(join.0.children[c], split.0.children[c]));
     if !reduces(join_leafward.len(), k, kept.count(), share) {
-        return candidate_vertex;
+        return (candidate_vertex, kept);
     }
     let vertex = kept.gather(|c| candidate_vertex[c]);
     drop(candidate_vertex);
@@ -365,7 +370,8 @@ pub fn reduce_regular_candidates(
             .par_chunks_mut(1 << 14)
             .for_each(|w| w.iter_mut().for_each(|e| *e = Word::of(renumber(e.get())))));
     }
-    vertex
+    let all = Supernodes::new(vertex.len(), |_| true);
+    (vertex, all)
 }
 
 /// True when [`reduce_regular_candidates`] runs on `n` vertices, `k`
@@ -373,21 +379,6 @@ pub fn reduce_regular_candidates(
 /// a candidate it reduces.
 pub(super) fn reduces(n: usize, k: usize, s: usize, share: usize) -> bool {
     (k - s).saturating_mul(share) >= n
-}
-
-/// True for a candidate with `up` children in the join tree and `down` in
-/// the split tree that is a supernode: other than one child in either.
-#[inline]
-fn is_supernode(up: u8, down: u8) -> bool {
-    up != 1 || down != 1
-}
-
-/// The supernodes among the candidates ([`is_supernode`]).
-pub(super) fn count_supernodes(join: &JoinTree, split: &SplitTree) -> usize {
-    (join.0.children.par_iter())
-        .zip(&split.0.children)
-        .filter(|&(&up, &down)| is_supernode(up, down))
-        .count()
 }
 
 /// The parents of a tree on the supernodes (each supernode's nearest
@@ -426,13 +417,20 @@ pub(super) const REDUCED_SHARE: usize = 8;
 /// Which candidates are supernodes, and each supernode's number (supernodes
 /// are numbered in candidate order): one bit per candidate and a count per
 /// 64 of them, where a table of numbers would cost 4 bytes per candidate.
-struct Supernodes {
+pub struct Supernodes {
     bits: Vec<u64>,
     /// Per 64 candidates: the supernodes before them.
     before: Vec<u32>,
 }
 
 impl Supernodes {
+    /// The candidates of the two trees with other than one child in
+    /// either: the supernodes.
+    pub fn of_trees(join: &JoinTree, split: &SplitTree) -> Self {
+        let (up, down) = (&join.0.children, &split.0.children);
+        Self::new(up.len(), |c| up[c] != 1 || down[c] != 1)
+    }
+
     fn new(k: usize, is_node: impl Fn(usize) -> bool + Sync) -> Self {
         let bits: Vec<u64> = (0..k.div_ceil(64))
             .into_par_iter()
@@ -454,7 +452,8 @@ impl Supernodes {
         Supernodes { bits, before }
     }
 
-    fn count(&self) -> usize {
+    /// The number of supernodes.
+    pub fn count(&self) -> usize {
         self.before.last().map_or(0, |&b| b as usize)
             + self.bits.last().map_or(0, |w| w.count_ones() as usize)
     }

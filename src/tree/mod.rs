@@ -495,10 +495,10 @@ impl ContourTree {
         times.join = tj;
         times.split = ts;
         times.sweeps = t.elapsed();
+        let supernodes = merge::Supernodes::of_trees(&join, &split);
         if let Some(available) = crate::field::io::available_memory() {
-            let supernodes = merge::count_supernodes(&join, &split);
-            let remade = remake.is_some();
-            check_merge_memory(n, candidates, supernodes, order_bytes, remade, available)?;
+            let (s, remade) = (supernodes.count(), remake.is_some());
+            check_merge_memory(n, candidates, s, order_bytes, remade, available)?;
         }
         progress.stage("merge");
         let t = Instant::now();
@@ -507,10 +507,11 @@ impl ContourTree {
         let empty = || Leafward::Words(Vec::new());
         let mut join_leafward = std::mem::replace(&mut join.0.leafward, empty());
         let mut split_leafward = std::mem::replace(&mut split.0.leafward, empty());
-        let candidate_vertex = merge::reduce_regular_candidates(
+        let (candidate_vertex, supernodes) = merge::reduce_regular_candidates(
             &mut join,
             &mut split,
             candidate_vertex,
+            supernodes,
             &mut join_leafward,
             &mut split_leafward,
             reduce_share,
@@ -518,7 +519,7 @@ impl ContourTree {
         if remake.is_some() {
             source.let_go();
         }
-        let merged = merge::merge(join, split, candidate_vertex, progress)?;
+        let merged = merge::merge(join, split, candidate_vertex, supernodes, progress)?;
         times.merge = t.elapsed();
         progress.stage("augment");
         let t = Instant::now();
