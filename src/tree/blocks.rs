@@ -131,7 +131,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             || {
                 let t = Instant::now();
                 sweep::whole(
-                    mesh, values, join_words, candidates, true, order, progress, true,
+                    mesh, values, join_words, candidates, true, order, progress, true, false,
                 )
                 .map(|s| (JoinTree(s), t.elapsed()))
             },
@@ -146,11 +146,15 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
                     order,
                     progress,
                     false,
+                    false,
                 )
                 .map(|s| (SplitTree(s), t.elapsed()))
             },
         );
-        return Ok((join?, split?));
+        let (join, (mut split, split_time)) = (join?, split?);
+        // Once neither sweep holds its union-find.
+        split.0.list_vertices();
+        return Ok((join, (split, split_time)));
     }
     let t = Instant::now();
     let span = mesh.edge_span();
@@ -379,7 +383,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         drop(fill);
 
         let mut uf = vec![NONE; k];
-        let mut rank = vec![0u8; k];
         let mut node_parent = vec![NONE; k];
         let mut lowest = vec![NONE; k];
         let mut parent = vec![NONE; self.candidates];
@@ -419,7 +422,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 }
                 joined = last;
                 merged += 1;
-                root = union(&mut uf, &mut rank, root, r, g);
+                root = union(&mut uf, root, r, g);
             }
             if candidate {
                 lowest[g as usize] = kid;

@@ -244,9 +244,10 @@ pub fn merge(
         let size = subtree[x as usize][1];
         subtree[parent[x as usize] as usize][1] += size;
     }
-    // Superarcs as (end towards the root, end away from it), candidates:
-    // one ends at each supernode but the root.
-    let mut ends: Vec<(u32, u32)> = Vec::with_capacity(supernodes.saturating_sub(1));
+    // Superarcs as (end towards the root, end away from it), candidates,
+    // made into superarcs in place below: one ends at each supernode but
+    // the root.
+    let mut arcs: Vec<Superarc> = Vec::with_capacity(supernodes.saturating_sub(1));
     if k > 0 {
         subtree[0] = [0, 1, NONE];
     }
@@ -258,40 +259,31 @@ pub fn merge(
         let tin = subtree[p as usize][1];
         subtree[p as usize][1] += size;
         let l = if supernode.is_node(p) {
-            ends.push((p, NONE));
-            ends.len() as u32 - 1
+            let (upper, lower) = (NodeId(p), NodeId(NONE));
+            arcs.push(Superarc { upper, lower });
+            arcs.len() as u32 - 1
         } else {
             subtree[p as usize][2]
         };
         subtree[x as usize] = [tin, tin + 1, l];
         if supernode.is_node(x) {
-            ends[l as usize].1 = x;
+            arcs[l as usize].lower = NodeId(x);
         }
     }
-    debug_assert_eq!(ends.len(), supernodes.saturating_sub(1));
+    debug_assert_eq!(arcs.len(), supernodes.saturating_sub(1));
     progress.check(0, 1)?;
-
-    // A and B from the parents; the second takes the parents themselves.
-    // A's copy of them goes where the cut order was, and B's answers where
-    // A's pointers were: pages already touched, none faulted in afresh.
-    let (a_of, pointers) = chain_tops(crate::pages::copied(cut, &parent), true, Vec::new());
-    progress.check(0, 1)?;
-    let (b_of, _) = chain_tops(parent, false, pointers);
-    progress.check(0, 1)?;
-
-    let mut arcs: Vec<Superarc> = ends
-        .into_par_iter()
-        .map(|(r, c)| {
-            let (hi, lo) = if r > c { (r, c) } else { (c, r) };
-            Superarc {
-                upper: NodeId(supernode.node(hi)),
-                lower: NodeId(supernode.node(lo)),
-            }
-        })
-        .collect();
+    arcs.par_iter_mut().for_each(|arc| {
+        let (r, c) = (arc.upper.0, arc.lower.0);
+        let (hi, lo) = if r > c { (r, c) } else { (c, r) };
+        arc.upper = NodeId(supernode.node(hi));
+        arc.lower = NodeId(supernode.node(lo));
+    });
     // Superarcs in the tree's canonical order, by (lower, upper), now: the
-    // per-vertex arrays are then made in their final form.
-    let new_id = canonical_arc_ids(&arcs, &nodes);
+    // per-vertex arrays are then made in their final form. The count takes
+    // the cut order's array, and gives it back for A's pointers; A and B
+    // come after, when the new numbers are let go (4 bytes per candidate
+    // fewer at the merge's peak than beside them).
+    let (new_id, spare) = canonical_arc_ids(&arcs, &nodes, cut);
     subtree.par_iter_mut().for_each(|[_, _, l]| {
         if *l != NONE {
             *l = new_id[*l as usize];
@@ -301,6 +293,15 @@ pub fn merge(
     // The superarcs themselves in that order: sorted in place on every core
     // (following the permutation's cycles instead is a cache miss a swap).
     arcs.par_sort_unstable_by_key(|a| (a.lower, a.upper));
+    progress.check(0, 1)?;
+
+    // A and B from the parents; the second takes the parents themselves.
+    // A's copy of them goes where the cut order was, and B's answers where
+    // A's pointers were: pages already touched, none faulted in afresh.
+    let (a_of, pointers) = chain_tops(crate::pages::copied(spare, &parent), true, Vec::new());
+    progress.check(0, 1)?;
+    let (b_of, _) = chain_tops(parent, false, pointers);
+    progress.check(0, 1)?;
     Ok(CandidateTree {
         nodes,
         arcs,
@@ -492,8 +493,9 @@ impl Supernodes {
 /// upper end, without a comparison sort: node `i` is the lower end of
 /// `nodes[i].up` superarcs, so counting places each superarc among those of
 /// its lower end, and those few (one per arc up from a saddle) are then
-/// ordered by their upper ends.
-fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node]) -> Vec<u32> {
+/// ordered by their upper ends. The canonical order is listed in `spare`'s
+/// allocation, given back with the numbers.
+fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node], spare: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let lower = |a: u32| arcs[a as usize].lower;
     let upper = |a: u32| arcs[a as usize].upper;
     let mut next = Vec::with_capacity(nodes.len());
@@ -508,7 +510,7 @@ fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node]) -> Vec<u32> {
         "every superarc goes up from its lower end"
     );
     // The superarcs in the canonical order.
-    let mut by_order = crate::pages::filled(arcs.len(), 0u32);
+    let mut by_order = crate::pages::reused(spare, arcs.len(), 0u32);
     for (a, arc) in arcs.iter().enumerate() {
         let slot = &mut next[arc.lower.0 as usize];
         by_order[*slot as usize] = a as u32;
@@ -524,7 +526,7 @@ fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node]) -> Vec<u32> {
         // SAFETY: `by_order` is a permutation: each old number once.
         unsafe { slots.write(old as usize, new as u32) };
     });
-    new_id
+    (new_id, by_order)
 }
 
 /// For every candidate `x` but the root, the last of its ancestors
@@ -1000,7 +1002,9 @@ mod tests {
             for arc in &arcs {
                 node[arc.lower.0 as usize].up += 1;
             }
-            let new_id = canonical_arc_ids(&arcs, &node);
+            // A spare allocation of any size, as the merge's is.
+            let spare = vec![7u32; (nodes as usize * 3) % 11];
+            let (new_id, _) = canonical_arc_ids(&arcs, &node, spare);
             let mut placed = vec![None; arcs.len()];
             for (arc, &id) in arcs.iter().zip(&new_id) {
                 prop_assert!(placed[id as usize].replace(*arc).is_none(), "one arc per number");

@@ -587,25 +587,30 @@ impl ContourTree {
         offsets: Vec<u32>,
         verts: Vec<u32>,
     ) -> Self {
-        // Node adjacency: up arcs (where the node is the lower end) first.
+        // Node adjacency: up arcs (where the node is the lower end) first,
+        // filled with no cursor array beside the offsets. Node `i`'s offset
+        // slot `i + 1` starts as the cursor of its down arcs, after its up
+        // arcs, and ends as the start of node `i + 1` once they are all in.
         let mut node_offsets = vec![0u32; nodes.len() + 1];
         for (i, n) in nodes.iter().enumerate() {
             node_offsets[i + 1] = node_offsets[i] + n.degree();
         }
-        let mut fill_up: Vec<u32> = node_offsets[..nodes.len()].to_vec();
-        let mut fill_down: Vec<u32> = nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| node_offsets[i] + u32::from(n.up))
-            .collect();
         let mut node_arcs = vec![ArcId(0); node_offsets[nodes.len()] as usize];
+        for (i, n) in nodes.iter().enumerate().rev() {
+            node_offsets[i + 1] = node_offsets[i] + u32::from(n.up);
+        }
         for (a, arc) in sorted_arcs.iter().enumerate() {
-            let l = arc.lower.0 as usize;
-            node_arcs[fill_up[l] as usize] = ArcId(a as u32);
-            fill_up[l] += 1;
-            let u = arc.upper.0 as usize;
-            node_arcs[fill_down[u] as usize] = ArcId(a as u32);
-            fill_down[u] += 1;
+            let cursor = &mut node_offsets[arc.upper.0 as usize + 1];
+            node_arcs[*cursor as usize] = ArcId(a as u32);
+            *cursor += 1;
+        }
+        // Each node's up arcs are one run of the arcs (sorted by lower end),
+        // in order.
+        let mut run = (u32::MAX, 0u32);
+        for (a, arc) in sorted_arcs.iter().enumerate() {
+            let l = arc.lower.0;
+            run = if run.0 == l { (l, run.1 + 1) } else { (l, 0) };
+            node_arcs[(node_offsets[l as usize] + run.1) as usize] = ArcId(a as u32);
         }
         Self {
             nodes,

@@ -145,6 +145,7 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
         order.into(),
         progress,
         true,
+        true,
     )
     .map(JoinTree)
 }
@@ -168,13 +169,16 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
         order.into(),
         progress,
         true,
+        true,
     )
     .map(SplitTree)
 }
 
 /// One sweep over the whole mesh: one block, whose nodes are the candidates.
 /// `words` holds every vertex's link code ([`link_words`]) and becomes the
-/// tree's `leafward`. It sets the progress fraction if it `report`s.
+/// tree's `leafward`. It sets the progress fraction if it `report`s. The
+/// split tree lists its candidates' vertices unless the caller does once
+/// the join sweep is done too (`list_now` false: [`SweepTree::list_vertices`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
@@ -185,6 +189,7 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     order: OrderView<'_>,
     progress: &Progress,
     report: bool,
+    list_now: bool,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
     debug_assert_eq!(words.len(), n);
@@ -192,20 +197,26 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     let swept = with_words!(&mut words, w => sweep::<M, O, _, false>(
         mesh, values, candidates, join, order, block, w, false, progress, report,
     ))?;
-    // The split tree lists the candidates' vertices, read off the words
-    // once the sweep has let its union-find go: 4 bytes per candidate
-    // fewer at the sweeps' peak.
-    let vertex = if join {
-        Vec::new()
-    } else {
-        with_words!(&mut words, w => candidate_vertices(w, candidates))
-    };
-    Ok(SweepTree {
+    let mut tree = SweepTree {
         parent: swept.parent,
         children: swept.children,
         leafward: words,
-        vertex,
-    })
+        vertex: Vec::new(),
+    };
+    if !join && list_now {
+        tree.list_vertices();
+    }
+    Ok(tree)
+}
+
+impl SweepTree {
+    /// Lists the candidates' vertices in `vertex`, read off the words: the
+    /// split tree's, once the sweeps have let their union-finds go (4
+    /// bytes per candidate fewer at the sweeps' peak).
+    pub(super) fn list_vertices(&mut self) {
+        let candidates = self.parent.len();
+        self.vertex = with_words!(&mut self.leafward, w => candidate_vertices(w, candidates));
+    }
 }
 
 /// The vertex of each of the `candidates` candidates from a sweep's words
@@ -353,9 +364,6 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
     // uf[c]: ROOT | last node of the component at a root, otherwise the
     // parent in the union-find forest.
     let mut uf = crate::pages::filled(nodes, NONE);
-    // The union-find's ranks, then (once it is done) the children counts:
-    // one byte per node for both.
-    let mut rank = crate::pages::filled(nodes, 0u8);
     let mut parent = crate::pages::filled(nodes, NONE);
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
@@ -483,17 +491,16 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 // last node to v.
                 let last = uf[r as usize] & !ROOT;
                 parent[last as usize] = kid;
-                root = union(&mut uf, &mut rank, root, r, kid);
+                root = union(&mut uf, root, r, kid);
             }
         }
     }
     debug_assert_eq!(next, if join { 0 } else { nodes as u32 });
     // A node's children are the components it absorbed, each of which
-    // named it as the parent of its last node: counted now, in the ranks'
-    // bytes, rather than kept beside them during the sweep.
+    // named it as the parent of its last node: counted now, once the
+    // union-find is let go, rather than kept beside it during the sweep.
     drop(uf);
-    let mut children = rank;
-    children.fill(0);
+    let mut children = crate::pages::filled(nodes, 0u8);
     for &p in &parent {
         if p != NONE {
             children[p as usize] += 1;
@@ -510,26 +517,33 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
 /// Unites the component of `root` with the other component `r` when the
 /// node `kid` is visited (`root == kid` while `kid` is still alone); the
 /// new root's word names `kid` as the last node. Returns the new root.
+///
+/// Linking by *random index* (Goel, Khanna, Larkin and Tarjan, "Disjoint
+/// set union with randomized linking", SODA 2014): of two roots, the one
+/// whose [`link_rank`] is higher becomes the root. With path halving in
+/// [`find`] that is O(α) expected per operation, as union by rank is, but
+/// needs no byte per node beside the union-find: the sweeps hold 8 bytes
+/// per node, not 9. Which root survives never shows in the trees (they
+/// depend only on the components).
 #[inline(always)]
-pub(super) fn union(uf: &mut [u32], rank: &mut [u8], root: u32, r: u32, kid: u32) -> u32 {
-    if root == kid {
-        // kid is still a singleton: hang it under r. Its rank is 0, so r's
-        // rank stays a valid bound on height without reading it.
-        uf[kid as usize] = r;
-        uf[r as usize] = ROOT | kid;
-        return r;
-    }
-    let (hi, lo) = if rank[r as usize] > rank[root as usize] {
-        (r, root)
-    } else {
+pub(super) fn union(uf: &mut [u32], root: u32, r: u32, kid: u32) -> u32 {
+    let (hi, lo) = if root != kid && link_rank(root) > link_rank(r) {
         (root, r)
+    } else {
+        // A singleton `kid` always hangs under `r`: linking it either way
+        // keeps the expected bound, and this way no word is rewritten.
+        (r, root)
     };
-    if rank[hi as usize] == rank[lo as usize] {
-        rank[hi as usize] += 1;
-    }
     uf[lo as usize] = hi;
     uf[hi as usize] = ROOT | kid;
     hi
+}
+
+/// A fixed pseudo-random total order of the nodes for [`union`]: a
+/// multiplication by an odd constant permutes the 32-bit words.
+#[inline(always)]
+fn link_rank(x: u32) -> u32 {
+    x.wrapping_mul(0x9E37_79B9)
 }
 
 /// Root of `x`'s set, halving the path on the way.

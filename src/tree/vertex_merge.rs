@@ -55,7 +55,6 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
     // uf[x]: NONE before x is visited; ROOT | last vertex at a root;
     // otherwise the parent in the union-find forest.
     let mut uf = vec![NONE; n];
-    let mut rank = vec![0u8; n];
     let mut parent = vec![NONE; n];
     let mut children = vec![0u8; n];
     let mut reps: Vec<u32> = Vec::with_capacity(16);
@@ -101,7 +100,7 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             let last = uf[r as usize] & !ROOT;
             parent[last as usize] = v;
             merged += 1;
-            root = union(&mut uf, &mut rank, root, r, v);
+            root = union(&mut uf, root, r, v);
         }
         children[v as usize] = merged;
     }
