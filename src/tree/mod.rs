@@ -502,6 +502,10 @@ impl ContourTree {
         }
         progress.stage("merge");
         let t = Instant::now();
+        // Neither the reduction nor the merge reads the order.
+        if remake.is_some() {
+            source.let_go();
+        }
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         // Held through the merge in 3 bytes per vertex where they fit.
         let empty = || Leafward::Words(Vec::new());
@@ -516,9 +520,6 @@ impl ContourTree {
             &mut split_leafward,
             reduce_share,
         );
-        if remake.is_some() {
-            source.let_go();
-        }
         let merged = merge::merge(join, split, candidate_vertex, supernodes, progress)?;
         times.merge = t.elapsed();
         progress.stage("augment");
