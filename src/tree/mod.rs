@@ -28,7 +28,7 @@
 //! ([`leafward`]): 6 bytes per vertex through the sweeps, the merge and
 //! the placement, which writes `vertex_arc` over the first record as it
 //! gives the second back (8 otherwise).
-//! Candidates add 18 bytes each during the sweeps and about 44 at the
+//! Candidates add 16 bytes each during the sweeps and about 44 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
 //! where half the vertices are candidates. There about half the
@@ -204,10 +204,11 @@ pub enum BuildError {
     /// The engine's arrays would not fit in the memory left.
     #[error(
         "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
-         ({candidates} candidate nodes, {}% of the vertices: each costs 18 bytes in the sweeps and up \
+         ({candidates} candidate nodes, {}% of the vertices: each costs {} bytes in the sweeps and up \
          to {} at the merge), but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
+        SWEEP_BYTES_PER_CANDIDATE,
         MERGE_BYTES_PER_CANDIDATE,
         available >> 20
     )]
@@ -236,7 +237,7 @@ impl From<Cancelled> for BuildError {
 /// else 4: [`crate::field::order_bytes`]), before the sweeps tell how many
 /// of the candidates are supernodes: half of them, as on every scan
 /// measured (44-50 %; [`check_merge_memory`] checks again with the real
-/// number). The order, the two sweeps' records and 18 per candidate while
+/// number). The order, the two sweeps' records and 16 per candidate while
 /// sweeping; then the order unless it is let go (`order_remade`, see
 /// [`remakes_order`]) and, at the merge, the records and the candidates'
 /// tables ([`merge_table_bytes`]); at the grouping the order (made again if
@@ -258,7 +259,7 @@ fn peak_bytes_of(
     order_remade: bool,
 ) -> u64 {
     let records = records_bytes(candidates) * n as u64;
-    let sweeps = order_bytes + records + 18 * candidates as u64;
+    let sweeps = order_bytes + records + SWEEP_BYTES_PER_CANDIDATE * candidates as u64;
     let merge = records + merge_table_bytes(n, candidates, supernodes);
     let held = if order_remade { 0 } else { order_bytes };
     let grouping = order_bytes + 8 * n as u64;
@@ -289,6 +290,11 @@ fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
 /// What a candidate node costs at the merge's peak (see
 /// [`merge_table_bytes`]).
 const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
+
+/// What a candidate node costs while both sweeps run: per sweep its
+/// union-find word and its parent ([`sweep`]; the children counts and
+/// the candidates' vertices come once the union-finds are let go).
+const SWEEP_BYTES_PER_CANDIDATE: u64 = 16;
 
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
@@ -748,13 +754,13 @@ mod tests {
         assert!(check_memory(n, n / 50, order, false, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates, half of them supernodes,
         // so the other 14 % are reduced before the merge): the sweeps'
-        // 15.04 bytes per vertex fit on a 24 GiB machine with the order let
-        // go and remade (5.04 GiB left beside the 10 already held), not
-        // with 5; held through the merge, the merge's 16.16 need 6.16.
+        // 14.48 bytes per vertex fit on a 24 GiB machine with the order let
+        // go and remade (4.48 GiB left beside the 10 already held), not
+        // with 4.47; held through the merge, the merge's 16.16 need 6.16.
         let noisy = n * 28 / 100;
         assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, order, true, 5050 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, true, 5 * gib).is_err());
+        assert!(check_memory(n, noisy, order, true, 4490 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, true, 4470 * (gib / 1000)).is_err());
         assert!(check_memory(n, noisy, order, false, 6170 * (gib / 1000)).is_ok());
         let e = check_memory(n, noisy, order, false, 6 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
@@ -769,6 +775,7 @@ mod tests {
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
+        assert!(message.contains("16 bytes in the sweeps"), "{message}");
         assert!(message.contains("up to 44"), "{message}");
         // Once the sweeps tell the supernodes: 8 % (the noisy 1024³ scan
         // of the README) are reduced to and the merge needs no more than

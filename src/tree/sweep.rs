@@ -40,11 +40,11 @@
 //! **Memory per vertex** while sweeping: 3 bytes (its word: link code,
 //! then candidate number or leafward candidate, packed in 3 bytes while
 //! the candidates number fewer than 2^23: [`super::leafward`], read and
-//! written through [`Word`]; else 4); per candidate 9 bytes
-//! (union-find, parent, and one byte for the rank, which becomes the
-//! number of children once the sweep is done). The split tree's list of
-//! the candidates' vertices (4 bytes each) is read off its words after
-//! the sweep, once the union-find is gone.
+//! written through [`Word`]; else 4); per candidate 8 bytes
+//! (union-find and parent: the union links by random index, so it keeps
+//! no rank). Once the union-find is let go, each candidate's children are
+//! counted (1 byte), and once both sweeps are done the split tree's list
+//! of the candidates' vertices (4 bytes each) is read off its words.
 
 use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use crate::field::{OrderView, VertexOrder};
