@@ -70,7 +70,7 @@
 use super::leafward::{self, Word, with_both_words, with_words};
 use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
-    union,
+    link_rank, union,
 };
 use crate::field::{OrderView, VertexOrder};
 use crate::mesh::Mesh;
@@ -422,7 +422,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 }
                 joined = last;
                 merged += 1;
-                root = union(&mut uf, root, r, g);
+                root = union(&mut uf, root, r, g, link_rank(root) > link_rank(r));
             }
             if candidate {
                 lowest[g as usize] = kid;

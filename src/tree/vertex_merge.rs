@@ -6,7 +6,7 @@
 //! slow on smooth fields (every vertex visited in value order through
 //! random memory) but simple enough to trust.
 
-use super::sweep::{NONE, ROOT, union};
+use super::sweep::{NONE, ROOT, link_rank, union};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::VertexOrder;
 use crate::mesh::{LINK_EMPTY, LINK_SEVERAL, Mesh};
@@ -100,7 +100,7 @@ pub fn sweep<M: Mesh, O: VertexOrder + ?Sized>(
             let last = uf[r as usize] & !ROOT;
             parent[last as usize] = v;
             merged += 1;
-            root = union(&mut uf, root, r, v);
+            root = union(&mut uf, root, r, v, link_rank(root) > link_rank(r));
         }
         children[v as usize] = merged;
     }
