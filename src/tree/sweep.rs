@@ -40,10 +40,11 @@
 //! **Memory per vertex** while sweeping: 3 bytes (its word: link code,
 //! then candidate number or leafward candidate, packed in 3 bytes while
 //! the candidates number fewer than 2^23: [`super::leafward`], read and
-//! written through [`Word`]; else 4); per candidate 8 bytes
-//! (union-find and parent: the union keeps the older root, so no rank). Once the union-find is let go, each candidate's children are
-//! counted (1 byte), and once both sweeps are done the split tree's list
-//! of the candidates' vertices (4 bytes each) is read off its words.
+//! written through [`Word`]; else 4); per candidate 8 bytes (union-find
+//! and parent: the union keeps the older root, so no rank). Once the
+//! union-find is let go, each candidate's children are counted (1 byte),
+//! and once both sweeps are done the split tree's list of the candidates'
+//! vertices (4 bytes each) is read off its words.
 
 use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use crate::field::{OrderView, VertexOrder};
