@@ -835,6 +835,7 @@ mod tests {
 
     /// Everything a tree holds, for comparing two trees vertex for vertex.
     fn parts(t: &ContourTree) -> (Vec<Node>, Vec<Superarc>, Vec<VertexPlace>, Vec<Vec<u32>>) {
+        adjacency_lists_the_arcs(t);
         (
             t.nodes().to_vec(),
             t.arcs().to_vec(),
@@ -843,6 +844,23 @@ mod tests {
                 .map(|a| t.arc_vertices(ArcId(a)).to_vec())
                 .collect(),
         )
+    }
+
+    /// Each node's up and down arcs are the superarcs whose lower (upper)
+    /// end it is, in the arcs' order: lists kept apart, one per node.
+    fn adjacency_lists_the_arcs(t: &ContourTree) {
+        let mut up = vec![Vec::new(); t.nodes().len()];
+        let mut down = vec![Vec::new(); t.nodes().len()];
+        for (a, arc) in t.arcs().iter().enumerate() {
+            up[arc.lower.0 as usize].push(ArcId(a as u32));
+            down[arc.upper.0 as usize].push(ArcId(a as u32));
+        }
+        for (i, node) in t.nodes().iter().enumerate() {
+            let id = NodeId(i as u32);
+            assert_eq!(t.up_arcs(id), up[i].as_slice(), "up arcs of node {i}");
+            assert_eq!(t.down_arcs(id), down[i].as_slice(), "down arcs of node {i}");
+            assert_eq!(t.node_arcs(id).len() as u32, node.degree());
+        }
     }
 
     fn same_as_vertex_merge(dims: [usize; 3], values: Values) {
