@@ -98,12 +98,16 @@
 //! are supernodes: 32 per candidate by this count (34 with 32-bit
 //! degrees), 37-41 measured on tooth, engine and colin27_ch2 (56 with the
 //! depth-first pass and a table of supernode numbers). The cut order
-//! shares one array with the stack of leaves waiting to be cut. Where the
-//! reduction runs, the merge's candidates are the supernodes (44 per
-//! supernode), and the reduction itself holds 14 per candidate (both
+//! shares one array with the stack of leaves waiting to be cut, and then
+//! with the superarcs' canonical order, counted before the chains rather
+//! than beside them; the superarcs are made in place from their ends.
+//! Where the reduction runs, the merge's candidates are the supernodes
+//! (40 per supernode, measured on tooth; the memory model keeps 44 as its
+//! bound), and the reduction itself holds 14 per candidate (both
 //! trees' parents and child counts, the candidates' vertices, one map of
 //! 4 bytes) and 8 per supernode: on tooth (31 % candidates, 15 %
-//! supernodes) 6 + 6.6 bytes per vertex at the merge where it was 6 + 13.6.
+//! supernodes) 6 + 5.9 bytes per vertex at the merge (6 + 6.6 at 44 per
+//! supernode, 6 + 13.6 before the reduction).
 //!
 //! Finally the regular vertices of each superarc are laid out in the vertex
 //! order by one counting pass over the order (the one pass that reads the
@@ -329,8 +333,8 @@ pub fn merge(
 ///
 /// On a noisy scan about half the candidates go (tooth 31 % of the
 /// vertices, 15 % supernodes), and every table of the merge that follows
-/// is the supernodes' size: 44 bytes per supernode at its peak instead of
-/// 44 per candidate. This step holds 14 bytes per candidate and 8 per
+/// is the supernodes' size: about 40 bytes per supernode at its peak
+/// instead of 40 per candidate. This step holds 14 bytes per candidate and 8 per
 /// supernode. It runs when at least one vertex in `share` is a candidate
 /// to reduce ([`REDUCED_SHARE`]: where it lowers the peak). Takes the
 /// supernodes among the candidates (`kept`, [`Supernodes::of_trees`]) and

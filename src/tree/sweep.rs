@@ -524,7 +524,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
 /// nodes' numbers, given in the order visited): a component that has
 /// grown longer is likely the larger, as union by rank would have it, and
 /// path halving in [`find`] keeps the paths short (on white noise as fast
-/// as union by rank, measured; linking by [`link_rank`] was 5-10 %
+/// as union by rank, measured; linking by [`link_rank`] was up to 10 %
 /// slower). Which root survives never shows in the trees: they depend
 /// only on the components.
 #[inline(always)]
