@@ -363,7 +363,8 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
     debug_assert!(BLOCKED || (lo == 0 && block.hi as usize == n));
     // uf[c]: ROOT | last node of the component at a root, otherwise the
     // parent in the union-find forest.
-    let mut uf = crate::pages::filled(nodes, NONE);
+    let mut uf_words = crate::pages::filled(UF_SHIFT + nodes, NONE);
+    let uf = &mut uf_words[UF_SHIFT..];
     let mut parent = crate::pages::filled(nodes, NONE);
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
@@ -439,7 +440,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 // One component beyond v, reached through one neighbour: v
                 // remembers its last node. Nothing else.
                 let u = mesh.neighbour_at(v, code);
-                let r = find(&mut uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
+                let r = find(uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
                 leafward[(v - lo) as usize] = W::of(uf[r as usize] & !ROOT);
                 continue;
             }
@@ -483,7 +484,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 }
             }
             for &u in &reps {
-                let r = find(&mut uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
+                let r = find(uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
                 if r == root {
                     continue;
                 }
@@ -491,7 +492,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 // last node to v.
                 let last = uf[r as usize] & !ROOT;
                 parent[last as usize] = kid;
-                root = union(&mut uf, root, r, kid, (root > r) == join);
+                root = union(uf, root, r, kid, (root > r) == join);
             }
         }
     }
@@ -499,7 +500,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
     // A node's children are the components it absorbed, each of which
     // named it as the parent of its last node: counted now, once the
     // union-find is let go, rather than kept beside it during the sweep.
-    drop(uf);
+    drop(uf_words);
     let mut children = crate::pages::filled(nodes, 0u8);
     for &p in &parent {
         if p != NONE {
@@ -514,6 +515,14 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
     })
 }
 
+/// Words by which a sweep's union-find starts into its allocation: 65
+/// cache lines and a page, so that `uf[c]` and `parent[c]`, two arrays of
+/// one size allocated one after the other, do not fall on the same cache
+/// sets (most likely; this machine has no hardware counters to show it). Without it the sweeps on white noise were 10 % slower than with
+/// a rank array of one byte per node between the two; that array, unused,
+/// or this shift restored the speed (3 alternated runs each).
+const UF_SHIFT: usize = 1040;
+
 /// Unites the component of `root` with the other component `r` when the
 /// node `kid` is visited (`root == kid` while `kid` is still alone); the
 /// new root's word names `kid` as the last node. Returns the new root:
@@ -523,10 +532,8 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
 /// sweeps keep the *older* root, visited first (`root_stays` compares the
 /// nodes' numbers, given in the order visited): a component that has
 /// grown longer is likely the larger, as union by rank would have it, and
-/// path halving in [`find`] keeps the paths short. Measured: on scans the
-/// sweeps are as fast as with union by rank or faster; on white noise 10 %
-/// slower, about as much as with linking by [`link_rank`] or with the rank
-/// kept in the roots' words, so the linking rule is not the whole cause.
+/// path halving in [`find`] keeps the paths short: as fast as union by
+/// rank, measured on white noise and on the scans (with [`UF_SHIFT`]).
 /// Which root survives never shows in the trees: they depend only on the
 /// components.
 #[inline(always)]
