@@ -131,7 +131,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             || {
                 let t = Instant::now();
                 sweep::whole(
-                    mesh, values, join_words, candidates, true, order, progress, true, false,
+                    mesh, values, join_words, candidates, true, order, progress, true,
                 )
                 .map(|s| (JoinTree(s), t.elapsed()))
             },
@@ -145,7 +145,6 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
                     false,
                     order,
                     progress,
-                    false,
                     false,
                 )
                 .map(|s| (SplitTree(s), t.elapsed()))

@@ -145,7 +145,6 @@ pub fn join_tree<M: Mesh, O: VertexOrder + ?Sized>(
         order.into(),
         progress,
         true,
-        true,
     )
     .map(JoinTree)
 }
@@ -169,16 +168,18 @@ pub fn split_tree<M: Mesh, O: VertexOrder + ?Sized>(
         order.into(),
         progress,
         true,
-        true,
     )
-    .map(SplitTree)
+    .map(|mut tree| {
+        tree.list_vertices();
+        SplitTree(tree)
+    })
 }
 
 /// One sweep over the whole mesh: one block, whose nodes are the candidates.
 /// `words` holds every vertex's link code ([`link_words`]) and becomes the
 /// tree's `leafward`. It sets the progress fraction if it `report`s. The
-/// split tree lists its candidates' vertices unless the caller does once
-/// the join sweep is done too (`list_now` false: [`SweepTree::list_vertices`]).
+/// caller lists the split tree's candidates' vertices
+/// ([`SweepTree::list_vertices`]), once no sweep holds its union-find.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
@@ -189,7 +190,6 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     order: OrderView<'_>,
     progress: &Progress,
     report: bool,
-    list_now: bool,
 ) -> Result<SweepTree, Cancelled> {
     let n = mesh.num_vertices();
     debug_assert_eq!(words.len(), n);
@@ -197,16 +197,12 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     let swept = with_words!(&mut words, w => sweep::<M, O, _, false>(
         mesh, values, candidates, join, order, block, w, false, progress, report,
     ))?;
-    let mut tree = SweepTree {
+    Ok(SweepTree {
         parent: swept.parent,
         children: swept.children,
         leafward: words,
         vertex: Vec::new(),
-    };
-    if !join && list_now {
-        tree.list_vertices();
-    }
-    Ok(tree)
+    })
 }
 
 impl SweepTree {

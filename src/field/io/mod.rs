@@ -66,10 +66,10 @@ pub(crate) use self::check_volume_size as check_dims;
 /// on top of the values themselves (vertex order, the sweeps' word per
 /// vertex, then the augmented tree). The tree module owns the real figure
 /// (`crate::tree`'s module doc): the order (about 1 byte for 8-bit values,
-/// else 4) and 8, plus 18 per *candidate node* in the sweeps and up to 44
+/// else 4) and 8, plus 16 per *candidate node* in the sweeps and up to 44
 /// at the merge (44 per supernode where the candidates regular in both
 /// trees are reduced first): 9-12 on smooth fields and 8-bit brains,
-/// 13.8-13.9 on noisy scans (tooth, a noisy 1024³ volume), 23 on white
+/// 12.3-13.2 on noisy scans (tooth, a noisy 1024³ volume), 21 on white
 /// noise. The readers check this a priori figure, that of a noisy scan,
 /// before reading: what the engine holds before it knows the candidates
 /// (the order and the records, at most 12) is below it. `flexiso info`
@@ -81,7 +81,7 @@ pub const TREE_BYTES_PER_VERTEX: u64 = 14;
 /// Bytes per vertex the readers reserve for the engine when checking that a
 /// volume fits in memory: [`TREE_BYTES_PER_VERTEX`] plus headroom. A
 /// 1024³ uint8 volume is read where 17 GiB are free (it was 21 before the
-/// merge's reduction: a noisy one peaks at 14.8).
+/// merge's reduction: a noisy one peaks at 14.2).
 pub const CHECK_BYTES_PER_VERTEX: u64 = 16;
 
 /// What to do with NaN or infinite values.
