@@ -13,6 +13,14 @@
 //! zero-height arcs are collapsed, seconds to the measures (hypervolume)
 //! plus the whole pruning sequence, and the slowest of a series of level
 //! changes (full tree, 100 arcs, random levels, back), in milliseconds.
+//!
+//! `--threads 1,2,4,...` runs every dataset once per thread count, each in
+//! a pool of that many threads (the engine picks its blocks for the pool,
+//! as it would on a machine with that many cores), adds the CPU time of
+//! the process (all threads) to each row, and ends each dataset with its
+//! scaling curve: the speed-up of the total, and of each stage, over the
+//! first thread count. That is the curve issue 13 asks for on 16 cores,
+//! in one command.
 
 use crate::field::ScalarField;
 use crate::field::io::{ReadOptions, read_volume};
@@ -31,9 +39,10 @@ pub struct Args {
     /// Folder of volumes (every .nrrd/.nhdr/.raw/... in it).
     #[arg(default_value = "../shared/data")]
     pub dir: PathBuf,
-    /// Only datasets whose file name contains this.
-    #[arg(long)]
-    pub only: Option<String>,
+    /// Only datasets whose name contains one of these (comma-separated;
+    /// the built-in fields are `synthetic-N` and `synthetic-noisy-N`).
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
     /// Size of the synthetic noisy float field (0 to skip it).
     #[arg(long, default_value_t = 256)]
     pub synthetic: usize,
@@ -48,6 +57,10 @@ pub struct Args {
     /// value comparisons, on the experiment's families and the volumes).
     #[arg(long, value_enum, default_value_t = super::tree::Algorithm::CarrSnoeyinkAxen)]
     pub algorithm: super::tree::Algorithm,
+    /// Thread counts to run each dataset with, e.g. `1,2,4,8,16`: one row
+    /// per count and the scaling curve (speed-up over the first count).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Vec<u16>,
     /// Edge lengths of the experiment's families (with --algorithm).
     #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
     pub families: Vec<usize>,
@@ -79,6 +92,11 @@ pub struct Row {
     pub simplification: Duration,
     /// Slowest single level change.
     pub level_change: Duration,
+    /// Threads of the pool it ran in.
+    pub threads: usize,
+    /// CPU time of the whole process (every thread) during the build and
+    /// the simplification.
+    pub cpu: Duration,
 }
 
 /// Runs `flexiso bench`.
@@ -86,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.algorithm == super::tree::Algorithm::RaichelSeshadhri {
         let volumes = super::bench_engines::Volumes {
             dir: &args.dir,
-            only: args.only.as_deref(),
+            only: &args.only,
             repeat: args.repeat,
         };
         return super::bench_engines::run(&volumes, &args.families, args.csv.as_ref());
@@ -96,14 +114,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file() && is_volume(p))
         .filter(|p| {
-            args.only.as_deref().is_none_or(|o| {
-                p.file_name()
-                    .is_some_and(|n| n.to_string_lossy().contains(o))
-            })
+            p.file_name()
+                .is_some_and(|n| wanted(&args.only, &n.to_string_lossy()))
         })
         .collect();
     inputs.sort_by_key(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0));
-    println!("{}", header());
+    let pools = pools(&args.threads)?;
+    println!("{}", header(!pools.is_empty()));
     for path in inputs {
         let t = Instant::now();
         let volume = read_volume(&path, &ReadOptions::default())
@@ -113,15 +130,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let row = bench_field(&name, &volume.field, load, args.repeat.max(1));
-        println!("{}", format_row(&row));
+        bench_in_pools(&name, &volume.field, load, args.repeat, &pools);
     }
     let synthetic = [
         (args.smooth, "synthetic", None),
         (args.synthetic, "synthetic-noisy", Some((0.05, 7))),
     ];
     for (n, name, noise) in synthetic {
-        if n == 0 || args.only.is_some() {
+        let name = format!("{name}-{n}");
+        if n == 0 || !wanted(&args.only, &name) {
             continue;
         }
         let t = Instant::now();
@@ -130,15 +147,120 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => Synthetic::cube(n),
         }
         .generate();
-        let row = bench_field(
-            &format!("{name}-{n}"),
-            &field,
-            t.elapsed(),
-            args.repeat.max(1),
-        );
-        println!("{}", format_row(&row));
+        bench_in_pools(&name, &field, t.elapsed(), args.repeat, &pools);
     }
     Ok(())
+}
+
+/// True if a dataset of this name is benched: no `--only`, or one of its
+/// patterns in the name.
+pub(super) fn wanted(only: &[String], name: &str) -> bool {
+    only.is_empty() || only.iter().any(|o| name.contains(o.as_str()))
+}
+
+/// A thread pool per `--threads` count, fewest threads first (none: the
+/// global pool).
+fn pools(threads: &[u16]) -> anyhow::Result<Vec<rayon::ThreadPool>> {
+    let mut threads = threads.to_vec();
+    threads.sort_unstable();
+    threads.dedup();
+    threads
+        .iter()
+        .map(|&t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t.into())
+                .build()
+                .with_context(|| format!("cannot start a pool of {t} threads"))
+        })
+        .collect()
+}
+
+/// One row per pool (or one in the global pool), then the scaling curve.
+/// Each row is the fastest of `repeat` builds, as without pools.
+fn bench_in_pools(
+    name: &str,
+    field: &ScalarField,
+    load: Duration,
+    repeat: usize,
+    pools: &[rayon::ThreadPool],
+) {
+    if pools.is_empty() {
+        println!(
+            "{}",
+            format_row(&bench_field(name, field, load, repeat.max(1)), false)
+        );
+        return;
+    }
+    // A first build untimed, so that the first count's row does not pay
+    // alone for the memory the process takes from the system.
+    let _ = bench_field(name, field, load, 1);
+    let rows: Vec<Row> = pools
+        .iter()
+        .map(|pool| {
+            let row = pool.install(|| bench_field(name, field, load, repeat.max(1)));
+            println!("{}", format_row(&row, true));
+            row
+        })
+        .collect();
+    println!("{}", scaling(&rows));
+}
+
+/// The speed-up of each row over the first, total and per stage: one line
+/// per dataset, e.g. `  scaling of tooth over 1 thread: 2 threads 1.92x (sort
+/// 1.97, links 1.99, ...)`.
+pub fn scaling(rows: &[Row]) -> String {
+    let Some(first) = rows.first() else {
+        return String::new();
+    };
+    let stages = |r: &Row| {
+        let t = &r.times;
+        [
+            ("sort", t.sort),
+            ("links", t.links),
+            ("sweeps", t.sweeps.saturating_sub(t.links)),
+            ("merge", t.merge),
+            ("augm", t.augment),
+            ("simp", r.simplification),
+        ]
+    };
+    let ratio = |a: Duration, b: Duration| a.as_secs_f64() / b.as_secs_f64().max(1e-9);
+    let mut out = format!(
+        "  scaling of {} over {} thread{}:",
+        first.name,
+        first.threads,
+        if first.threads == 1 { "" } else { "s" }
+    );
+    for r in &rows[1..] {
+        let parts: Vec<String> = stages(first)
+            .iter()
+            .zip(stages(r))
+            .map(|((stage, a), (_, b))| format!("{stage} {:.2}", ratio(*a, b)))
+            .collect();
+        out += &format!(
+            "\n    {:>3} threads: total {:.2}x ({}), CPU {:.2}x",
+            r.threads,
+            ratio(first.times.total(), r.times.total()),
+            parts.join(", "),
+            ratio(r.cpu, first.cpu),
+        );
+    }
+    out
+}
+
+/// CPU time of this process so far, every thread (zero where unknown).
+pub fn process_cpu() -> Duration {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: getrusage writes the struct it is given.
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } == 0 {
+            let t = |tv: libc::timeval| {
+                Duration::from_secs(tv.tv_sec as u64) + Duration::from_micros(tv.tv_usec as u64)
+            };
+            return t(usage.ru_utime) + t(usage.ru_stime);
+        }
+    }
+    Duration::ZERO
 }
 
 fn is_volume(p: &std::path::Path) -> bool {
@@ -159,6 +281,7 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
     for _ in 0..repeat {
         reset_peak_rss();
         let base = current_rss();
+        let cpu = process_cpu();
         let (tree, times) = match ContourTree::from_field(field, &Progress::new()) {
             Ok(t) => t,
             // Nobody cancels a benchmark; a volume too large stops it.
@@ -166,6 +289,7 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
         };
         let peak = peak_rss();
         let (collapsed, simplification, level_change) = simplification_times(&tree, field);
+        let cpu = process_cpu().saturating_sub(cpu);
         let row = Row {
             name: name.to_owned(),
             dims: field.dims(),
@@ -177,6 +301,8 @@ pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usiz
             collapsed,
             simplification,
             level_change,
+            threads: rayon::current_num_threads(),
+            cpu,
         };
         drop(tree);
         if best
@@ -218,9 +344,9 @@ fn simplification_times(tree: &ContourTree, field: &ScalarField) -> (usize, Dura
     (arcs, sequence, slowest)
 }
 
-/// The table header.
-pub fn header() -> String {
-    format!(
+/// The table header; `threads`: with the columns of `--threads`.
+pub fn header(threads: bool) -> String {
+    let head = format!(
         "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7} {:>8} {:>7} {:>9} {:>6} {:>8}",
         "dataset",
         "dims",
@@ -239,14 +365,19 @@ pub fn header() -> String {
         "collapsed",
         "simp",
         "level ms"
-    )
+    );
+    if threads {
+        format!("{head} {:>7} {:>7}", "threads", "CPU s")
+    } else {
+        head
+    }
 }
 
-/// One table line.
-pub fn format_row(r: &Row) -> String {
+/// One table line; `threads`: with the columns of `--threads`.
+pub fn format_row(r: &Row, threads: bool) -> String {
     let n = (r.dims[0] * r.dims[1] * r.dims[2]) as f64;
     let s = |d: Duration| format!("{:.3}", d.as_secs_f64());
-    format!(
+    let row = format!(
         "{:<22} {:>13} {:>9} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>7} {:>7.3} {:>8.0} {:>7.1} {:>9} {:>6} {:>8.3}",
         r.name,
         format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
@@ -265,7 +396,12 @@ pub fn format_row(r: &Row) -> String {
         r.collapsed,
         s(r.simplification),
         r.level_change.as_secs_f64() * 1e3,
-    )
+    );
+    if threads {
+        format!("{row} {:>7} {:>7.2}", r.threads, r.cpu.as_secs_f64())
+    } else {
+        row
+    }
 }
 
 fn status_kib(key: &str) -> u64 {

@@ -116,8 +116,8 @@ fn print_row(r: &Row) {
 pub struct Volumes<'a> {
     /// The folder of volumes.
     pub dir: &'a std::path::Path,
-    /// Only the volumes whose file name contains this.
-    pub only: Option<&'a str>,
+    /// Only the volumes whose file name contains one of these.
+    pub only: &'a [String],
     /// Runs per volume (the fastest is kept).
     pub repeat: usize,
 }
@@ -142,10 +142,8 @@ pub fn run(args: &Volumes<'_>, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "nrrd"))
             .filter(|p| {
-                args.only.is_none_or(|o| {
-                    p.file_name()
-                        .is_some_and(|n| n.to_string_lossy().contains(o))
-                })
+                p.file_name()
+                    .is_some_and(|n| super::bench::wanted(args.only, &n.to_string_lossy()))
             })
             .collect();
         inputs.sort_by_key(|p| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0));
