@@ -81,6 +81,15 @@ use std::time::{Duration, Instant};
 /// The join and split trees, each with the time it took.
 pub type SweptTrees = ((JoinTree, Duration), (SplitTree, Duration));
 
+/// The band vertices of all blocks `cuts` bounds in a mesh of `n`
+/// vertices whose edges span `span` ids: the nodes the blocks add to the
+/// candidates.
+pub fn band_vertices(cuts: &[u32], n: usize, span: usize) -> usize {
+    cuts.windows(2)
+        .map(|w| Block::new(w[0], w[1], n, span).band_len())
+        .sum()
+}
+
 /// Cuts of the ids `0..n` into `blocks` blocks of nearly equal size:
 /// `blocks + 1` ids from 0 to n (fewer blocks if there are fewer ids).
 pub fn even_cuts(n: usize, blocks: usize) -> Vec<u32> {
@@ -176,17 +185,21 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     }
 
     // 1. Both sweeps of every block, all at once.
-    let trees: Vec<BlockTree> = with_both_words!(&mut join_words, &mut split_words, (j, s) => {
+    let mut join_trees: Vec<BlockTree> = with_both_words!(&mut join_words, &mut split_words, (j, s) => {
         sweep_blocks(mesh, values, order, &blocks, &nodes_in, j, s, progress)
     })?;
-    let (join_trees, split_trees) = trees.split_at(blocks.len());
+    let mut split_trees = join_trees.split_off(blocks.len());
 
     // 2. The nodes in the vertex order (each block's list is sorted: the
-    // sort merges runs).
-    let node_vertex: Vec<u32> = split_trees
-        .iter()
-        .flat_map(|t| t.vertex.iter().copied())
-        .collect();
+    // sort merges runs). The split trees' node lists move into one, each
+    // let go as it is copied.
+    let total_nodes = offset[blocks.len()] as usize;
+    let mut node_vertex: Vec<u32> = Vec::with_capacity(total_nodes);
+    let mut candidate: Vec<bool> = Vec::with_capacity(total_nodes);
+    for t in &mut split_trees {
+        node_vertex.extend_from_slice(&std::mem::take(&mut t.vertex));
+        candidate.extend_from_slice(&std::mem::take(&mut t.candidate));
+    }
     let mut by_order: Vec<u32> = (0..node_vertex.len() as u32).collect();
     by_order
         .par_sort_by(|&a, &b| values.ordering(node_vertex[a as usize], node_vertex[b as usize]));
@@ -218,10 +231,6 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             (above, below)
         })
         .unzip();
-    let candidate: Vec<bool> = split_trees
-        .iter()
-        .flat_map(|t| t.candidate.iter().copied())
-        .collect();
     let gluing = Gluing {
         values,
         candidates,
@@ -236,7 +245,6 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         || gluing.glue(false, split_trees, &split_crossing),
     );
     drop((join_crossing, split_crossing));
-    drop(trees);
     progress.check(0, 1)?;
 
     // 3. Every vertex's final word.
@@ -318,9 +326,8 @@ struct Glued {
     vertex: Vec<u32>,
     /// Per node: its nearest candidate ancestor in the glued tree (the
     /// tree of the nodes: a node's parent absorbed its component while it
-    /// was the component's last node) and that candidate's vertex; `NONE`
-    /// if it has none.
-    below: Vec<[u32; 2]>,
+    /// was the component's last node); `NONE` if it has none.
+    below: Vec<u32>,
     /// Per node: the lowest candidate of its subtree (join) / highest
     /// (split), by number.
     lowest: Vec<u32>,
@@ -352,8 +359,10 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
 
     /// The sweep over all nodes: block tree edges and the mesh edges that
     /// cross a cut (`crossing[b]`: (node, neighbour swept before it) for
-    /// the band of block `b`).
-    fn glue(&self, join: bool, trees: &[BlockTree], crossing: &[Vec<(u32, u32)>]) -> Glued {
+    /// the band of block `b`). The block trees are let go once their edges
+    /// are listed per node, and the lists and the union-find before each
+    /// node's nearest candidate ancestor is found.
+    fn glue(&self, join: bool, trees: Vec<BlockTree>, crossing: &[Vec<(u32, u32)>]) -> Glued {
         let k = self.node_vertex.len();
         // Per node, the nodes it is joined to and that are swept before it:
         // its children in its block's tree, its neighbours across a cut.
@@ -379,7 +388,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             before[fill[g as usize] as usize] = x;
             fill[g as usize] += 1;
         }
-        drop(fill);
+        drop((fill, trees));
 
         let mut uf = vec![NONE; k];
         let mut node_parent = vec![NONE; k];
@@ -442,25 +451,22 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             }
         }
         debug_assert_eq!(next, if join { 0 } else { self.candidates as u32 });
-        // Each node's nearest candidate ancestor (and its vertex), root
-        // first: step 3 climbs from candidate to candidate.
-        let mut below = vec![[NONE; 2]; k];
+        drop((first, before, uf));
+        // Each node's nearest candidate ancestor, root first (a parent
+        // before its children), written over its parent: step 3 climbs
+        // from candidate to candidate.
+        let mut below = node_parent;
         let root_first: Box<dyn Iterator<Item = &u32>> = if join {
             Box::new(self.by_order.iter())
         } else {
             Box::new(self.by_order.iter().rev())
         };
         for &g in root_first {
-            let p = node_parent[g as usize];
-            if p != NONE {
-                below[g as usize] = if self.candidate[p as usize] {
-                    [p, self.node_vertex[p as usize]]
-                } else {
-                    below[p as usize]
-                };
+            let p = below[g as usize];
+            if p != NONE && !self.candidate[p as usize] {
+                below[g as usize] = below[p as usize];
             }
         }
-        drop(node_parent);
         Glued {
             parent,
             children,
@@ -501,8 +507,8 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                         // of one child, so y's lowest candidate is x's.
                         let mut x = base + w;
                         loop {
-                            let [c, cv] = glued.below[x as usize];
-                            if c == NONE || !self.before(join, cv, v) {
+                            let c = glued.below[x as usize];
+                            if c == NONE || !self.before(join, self.node_vertex[c as usize], v) {
                                 break;
                             }
                             x = c;

@@ -296,6 +296,33 @@ const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
 /// the candidates' vertices come once the union-finds are let go).
 const SWEEP_BYTES_PER_CANDIDATE: u64 = 16;
 
+/// What a node of the blocks (a candidate or a band vertex) costs beyond
+/// the order and the records while the blocks are glued, both directions
+/// at once ([`blocks`]: the glue's lists, union-find, parents and lowest
+/// candidates, beside the nodes' vertices and order): 61 and 68 bytes
+/// measured on tooth in 2 and 8 blocks.
+const GLUE_BYTES_PER_NODE: u64 = 72;
+
+/// The cuts a build sweeps with: `cuts`, unless gluing their blocks would
+/// not fit in the memory `available` beyond what the build holds already
+/// (the order and the records), and then one block, the whole mesh, which
+/// gives the same trees. Where candidates are many (a noisy scan) the
+/// glue holds more than the whole sweep: tooth peaks at 28 bytes per
+/// vertex in 2 blocks and 36 in 8, 13.7 in one.
+fn cuts_that_fit<'a>(
+    cuts: &'a [u32],
+    whole: &'a [u32; 2],
+    candidates: usize,
+    band: usize,
+    available: Option<u64>,
+) -> &'a [u32] {
+    let glue = GLUE_BYTES_PER_NODE.saturating_mul((candidates + band) as u64);
+    match available {
+        Some(available) if cuts.len() > 2 && glue > available => whole,
+        _ => cuts,
+    }
+}
+
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
 /// 16-bit values, O(n)) and the merge or the placement, without the
@@ -495,6 +522,10 @@ impl ContourTree {
         if let Some(available) = crate::field::io::available_memory() {
             check_memory(n, candidates, order_bytes, remake.is_some(), available)?;
         }
+        let whole = [0, n as u32];
+        let band = blocks::band_vertices(cuts, n, mesh.edge_span());
+        let available = crate::field::io::available_memory();
+        let cuts = cuts_that_fit(cuts, &whole, candidates, band, available);
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
         progress.check(0, 1)?;
@@ -744,6 +775,24 @@ impl ContourTree {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn blocks_are_swept_only_where_their_glue_fits() {
+        let whole = [0, 1000];
+        let cuts = [0, 400, 700, 1000];
+        // 300 candidates and 60 band vertices: 72 bytes each.
+        let glue = 360 * GLUE_BYTES_PER_NODE;
+        assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue)), cuts);
+        assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue - 1)), whole);
+        assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, None), cuts);
+        // One block stays one block.
+        assert_eq!(cuts_that_fit(&whole, &whole, 300, 0, Some(0)), whole);
+        // Bands: one plane, one row and one step on either side of a cut.
+        assert_eq!(blocks::band_vertices(&cuts, 1000, 10), 4 * 10);
+        assert_eq!(blocks::band_vertices(&whole, 1000, 10), 0);
+        // A block thinner than two spans is all band.
+        assert_eq!(blocks::band_vertices(&[0, 500, 505, 1000], 1000, 10), 25);
+    }
 
     #[test]
     fn memory_check_follows_the_candidates() {

@@ -293,6 +293,11 @@ impl Block {
         (self.lo..self.inner_lo).chain(self.inner_hi.max(self.inner_lo)..self.hi)
     }
 
+    /// The number of vertices in the band.
+    pub fn band_len(&self) -> usize {
+        ((self.inner_lo - self.lo) + (self.hi - self.inner_hi.max(self.inner_lo))) as usize
+    }
+
     /// The nodes of the block's trees: its candidates and its band, from
     /// the words of the whole mesh while they hold the link codes.
     pub fn count_nodes<W: Word>(&self, words: &[W]) -> usize {
