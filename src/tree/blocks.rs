@@ -252,6 +252,14 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         || with_words!(&mut join_words, w => gluing.place(true, &join_glue, w)),
         || with_words!(&mut split_words, w => gluing.place(false, &split_glue, w)),
     );
+    drop((
+        join_glue.below,
+        join_glue.lowest,
+        split_glue.below,
+        split_glue.lowest,
+    ));
+    drop((node_vertex, candidate, by_order));
+    crate::pages::trim_freed();
     let elapsed = t.elapsed();
     let join = SweepTree {
         parent: join_glue.parent,
