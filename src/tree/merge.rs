@@ -737,6 +737,11 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     (offsets, arc_vertices)
 }
 
+/// At most this many threads count the superarcs' sizes by ranges
+/// ([`arc_sizes`]): each reads every vertex, so more would read the
+/// records more often than they save.
+const COUNT_RANGES: usize = 4;
+
 /// How far ahead in the order the grouping's passes prefetch each
 /// vertex's superarc (the reads are scattered over the volume).
 const READ_AHEAD: usize = 16;
@@ -749,18 +754,17 @@ const CONSUMING_CHUNKS: usize = 2;
 /// The size of each superarc (its regular vertices), read off
 /// `vertex_arc` in id order on every core: a count per thread, summed,
 /// where those counts are small beside the vertices (smooth fields, few
-/// superarcs); otherwise one count cut into a range of superarcs per
-/// thread, each thread reading every vertex and counting those on its
-/// range. A count per thread on a noisy scan is a word per superarc per
-/// thread (0.6 bytes per vertex each on tooth; carved from the heap below
-/// glibc's 1 MiB threshold, it stays resident once freed: 1.2 bytes per
-/// vertex of tooth's measured peak on 2 threads, 9.5 on 16), and one count
-/// shared by atomic increments was 10 ms slower on colin27_ch2.
+/// superarcs); otherwise one count cut into ranges of superarcs, up to
+/// [`COUNT_RANGES`], each counted by one thread reading every vertex. A
+/// count per thread on a noisy scan is a word per superarc per thread (0.6
+/// bytes per vertex each on tooth: 9.5 on 16 threads, above the build's
+/// peak), and one count shared by atomic increments was 10 ms slower on
+/// colin27_ch2 (0.27 s to the tree) than either.
 fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
     let threads = rayon::current_num_threads();
     if arcs.saturating_mul(threads) > vertex_arc.len() / 16 {
         let mut count = vec![0u32; arcs];
-        let per = arcs.div_ceil(threads).max(1 << 12);
+        let per = arcs.div_ceil(threads.min(COUNT_RANGES)).max(1 << 12);
         count
             .par_chunks_mut(per)
             .enumerate()
