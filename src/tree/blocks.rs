@@ -203,6 +203,8 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         sweep_blocks(mesh, values, order, &blocks, &nodes_in, j, s, progress)
     })?;
     let mut split_trees = join_trees.split_off(blocks.len());
+    // The blocks' union-finds, freed in every thread's heap.
+    crate::pages::trim_freed();
 
     // 2. The nodes in the vertex order (each block's list is sorted: the
     // sort merges runs). The split trees' node lists move into one, each
@@ -387,33 +389,32 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
     fn glue(&self, join: bool, trees: Vec<BlockTree>, crossing: &[Vec<(u32, u32)>]) -> Glued {
         let k = self.node_vertex.len();
         // Per node, the nodes it is joined to and that are swept before it:
-        // its children in its block's tree, its neighbours across a cut.
-        let tree_edges = trees.iter().enumerate().flat_map(|(b, t)| {
+        // its children in its block's tree, threaded through `link` (a
+        // node's first child until it is visited, then its parent in the
+        // glued tree) and `sibling`; its neighbours across a cut, sorted by
+        // node, and a bit per node that has any.
+        let mut link = vec![NONE; k];
+        let mut sibling = vec![NONE; k];
+        for (b, t) in trees.iter().enumerate() {
             let base = self.offset[b];
-            t.parent
-                .iter()
-                .enumerate()
-                .filter(|&(_, &p)| p != NONE)
-                .map(move |(c, &p)| (base + p, base + c as u32))
-        });
-        let edges = || tree_edges.clone().chain(crossing.iter().flatten().copied());
-        let mut first = vec![0u32; k + 1];
-        for (g, _) in edges() {
-            first[g as usize + 1] += 1;
+            for (c, &p) in t.parent.iter().enumerate() {
+                if p != NONE {
+                    let (p, c) = ((base + p) as usize, base + c as u32);
+                    sibling[c as usize] = link[p];
+                    link[p] = c;
+                }
+            }
         }
-        for i in 0..k {
-            first[i + 1] += first[i];
+        drop(trees);
+        let mut across: Vec<(u32, u32)> = crossing.iter().flatten().copied().collect();
+        across.sort_unstable();
+        let mut crosses = vec![0u64; k.div_ceil(64)];
+        for &(g, _) in &across {
+            crosses[g as usize / 64] |= 1 << (g % 64);
         }
-        let mut fill = first.clone();
-        let mut before = vec![0u32; first[k] as usize];
-        for (g, x) in edges() {
-            before[fill[g as usize] as usize] = x;
-            fill[g as usize] += 1;
-        }
-        drop((fill, trees));
+        let mut reps: Vec<u32> = Vec::with_capacity(16);
 
         let mut uf = vec![NONE; k];
-        let mut node_parent = vec![NONE; k];
         let mut lowest = vec![NONE; k];
         let mut parent = vec![NONE; self.candidates];
         let mut children = vec![0u8; self.candidates];
@@ -425,7 +426,17 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             Box::new(self.by_order.iter())
         };
         for &g in visit {
-            let reps = &before[first[g as usize] as usize..first[g as usize + 1] as usize];
+            reps.clear();
+            let mut child = std::mem::replace(&mut link[g as usize], NONE);
+            while child != NONE {
+                reps.push(child);
+                child = sibling[child as usize];
+            }
+            if crosses[g as usize / 64] >> (g % 64) & 1 != 0 {
+                let from = across.partition_point(|&(h, _)| h < g);
+                let to = from + across[from..].partition_point(|&(h, _)| h == g);
+                reps.extend(across[from..to].iter().map(|&(_, x)| x));
+            }
             let candidate = self.candidate[g as usize];
             let kid = if !candidate {
                 NONE
@@ -440,13 +451,14 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             let mut root = g;
             let mut merged = 0u8;
             let mut joined = NONE;
-            for &x in reps {
+            for &x in &reps {
                 let r = find(&mut uf, x);
                 if r == root {
                     continue;
                 }
                 let last = uf[r as usize] & !ROOT;
-                node_parent[last as usize] = g;
+                // Visited: its slot of `link` now holds its parent.
+                link[last as usize] = g;
                 if candidate {
                     parent[lowest[last as usize] as usize] = kid;
                 }
@@ -473,11 +485,11 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             }
         }
         debug_assert_eq!(next, if join { 0 } else { self.candidates as u32 });
-        drop((first, before, uf));
+        drop((sibling, across, crosses, uf));
         // Each node's nearest candidate ancestor, root first (a parent
         // before its children), written over its parent: step 3 climbs
         // from candidate to candidate.
-        let mut below = node_parent;
+        let mut below = link;
         let root_first: Box<dyn Iterator<Item = &u32>> = if join {
             Box::new(self.by_order.iter())
         } else {
