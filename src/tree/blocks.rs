@@ -52,22 +52,23 @@
 //! **Memory.** The per-vertex words are those of the whole sweep (3 bytes
 //! per vertex and direction, or 4 where a block has 2^23 nodes or more:
 //! a block numbers its nodes in its words); the blocks' union-finds are
-//! per node, as the whole sweep's are per candidate. The glue holds 61-68
+//! per node, as the whole sweep's are per candidate. The glue holds 57-73
 //! bytes per node at its peak, both directions at once (measured on tooth
-//! in 2 and 8 blocks): per direction its lists of each node's edges (the
-//! block trees are let go once they are listed), its union-find, each
-//! node's parent (overwritten by its nearest candidate ancestor once the
-//! lists and the union-find are let go) and lowest candidate, and the
-//! candidates' parents and child counts; shared, the nodes' vertices,
-//! order and flags. All of it is released before the merge, and the free
+//! in 2 and 8 blocks): per direction each node's block-tree children,
+//! threaded through two arrays (the block trees are let go once they are),
+//! the edges across the cuts sorted by node, its union-find, each node's
+//! parent (in the first child's slot once the node is visited, and
+//! overwritten by its nearest candidate ancestor once the lists and the
+//! union-find are let go) and lowest candidate, and the candidates'
+//! parents and child counts; shared, the nodes' vertices, order and flags. All of it is released before the merge, and the free
 //! pages of the allocator's heaps go back to the system
 //! ([`crate::pages::trim_freed`]). Bands cost two planes per cut: 2 (B -
 //! 1) X Y nodes for B blocks, about 1.5 % of a 512³ volume cut in 8.
 //!
 //! So blocks cost little on smooth fields (few nodes) and much on noisy
 //! scans, where the candidates are a third of the vertices: tooth peaks at
-//! 28 bytes per vertex beyond the values in 2 blocks and 36 in 8, against
-//! 13.7 swept whole. The build sweeps the whole mesh instead wherever the
+//! 27-28 bytes per vertex beyond the values in 2 blocks and 37-38 in 8,
+//! against 13.7 swept whole (39 and 48 before the glue's tables were cut). The build sweeps the whole mesh instead wherever the
 //! glue would not fit in the memory left (`GLUE_BYTES_PER_NODE` in
 //! [`super`]): the same trees, on two cores.
 //!
@@ -268,12 +269,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         || with_words!(&mut join_words, w => gluing.place(true, &join_glue, w)),
         || with_words!(&mut split_words, w => gluing.place(false, &split_glue, w)),
     );
-    drop((
-        join_glue.below,
-        join_glue.lowest,
-        split_glue.below,
-        split_glue.lowest,
-    ));
+    drop((join_glue.ancestor_lowest, split_glue.ancestor_lowest));
     drop((node_vertex, candidate, by_order));
     crate::pages::trim_freed();
     let elapsed = t.elapsed();
@@ -350,11 +346,13 @@ struct Glued {
     vertex: Vec<u32>,
     /// Per node: its nearest candidate ancestor in the glued tree (the
     /// tree of the nodes: a node's parent absorbed its component while it
-    /// was the component's last node); `NONE` if it has none.
-    below: Vec<u32>,
-    /// Per node: the lowest candidate of its subtree (join) / highest
-    /// (split), by number.
-    lowest: Vec<u32>,
+    /// was the component's last node), `NONE` if it has none, and that
+    /// candidate's vertex; and the lowest candidate of its subtree (join) /
+    /// highest (split), by number. Side by side: step 3 climbs through the
+    /// first two (on white noise for many steps a vertex, where looking up
+    /// each vertex elsewhere made the step 7 % slower) and reads the third
+    /// where it stops.
+    ancestor_lowest: Vec<[u32; 3]>,
 }
 
 /// What both glues read.
@@ -501,12 +499,19 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 below[g as usize] = below[p as usize];
             }
         }
+        let ancestor_lowest = below
+            .iter()
+            .zip(&lowest)
+            .map(|(&b, &l)| match b {
+                NONE => [NONE, NONE, l],
+                b => [b, self.node_vertex[b as usize], l],
+            })
+            .collect();
         Glued {
             parent,
             children,
             vertex,
-            below,
-            lowest,
+            ancestor_lowest,
         }
     }
 
@@ -528,7 +533,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                             // A node: a candidate's own number, flagged,
                             // or the lowest candidate a band vertex joined.
                             let g = (base + (w & !CANDIDATE)) as usize;
-                            let c = glued.lowest[g];
+                            let c = glued.ancestor_lowest[g][2];
                             *word = W::of(if self.candidate[g] { CANDIDATE | c } else { c });
                             continue;
                         }
@@ -540,14 +545,14 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                         // candidate, every node is a contracted band vertex
                         // of one child, so y's lowest candidate is x's.
                         let mut x = base + w;
-                        loop {
-                            let c = glued.below[x as usize];
-                            if c == NONE || !self.before(join, self.node_vertex[c as usize], v) {
-                                break;
+                        let lowest = loop {
+                            let [c, cv, lowest] = glued.ancestor_lowest[x as usize];
+                            if c == NONE || !self.before(join, cv, v) {
+                                break lowest;
                             }
                             x = c;
-                        }
-                        *word = W::of(glued.lowest[x as usize]);
+                        };
+                        *word = W::of(lowest);
                     }
                 });
         }

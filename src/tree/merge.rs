@@ -740,7 +740,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
 /// At most this many threads count the superarcs' sizes by ranges
 /// ([`arc_sizes`]): each reads every vertex, so more would read the
 /// records more often than they save.
-const COUNT_RANGES: usize = 4;
+const COUNT_RANGES: usize = 2;
 
 /// How far ahead in the order the grouping's passes prefetch each
 /// vertex's superarc (the reads are scattered over the volume).

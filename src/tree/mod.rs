@@ -299,16 +299,17 @@ const SWEEP_BYTES_PER_CANDIDATE: u64 = 16;
 /// What a node of the blocks (a candidate or a band vertex) costs beyond
 /// the order and the records while the blocks are glued, both directions
 /// at once ([`blocks`]: the glue's lists, union-find, parents and lowest
-/// candidates, beside the nodes' vertices and order): 61 and 68 bytes
-/// measured on tooth in 2 and 8 blocks.
-const GLUE_BYTES_PER_NODE: u64 = 72;
+/// candidates, beside the nodes' vertices and order, and the blocks'
+/// trees and union-finds before it): 57 and 73 bytes measured on tooth in
+/// 2 and 8 blocks.
+const GLUE_BYTES_PER_NODE: u64 = 80;
 
 /// The cuts a build sweeps with: `cuts`, unless gluing their blocks would
 /// not fit in the memory `available` beyond what the build holds already
 /// (the order and the records), and then one block, the whole mesh, which
 /// gives the same trees. Where candidates are many (a noisy scan) the
-/// glue holds more than the whole sweep: tooth peaks at 28 bytes per
-/// vertex in 2 blocks and 36 in 8, 13.7 in one.
+/// glue holds more than the whole sweep: tooth peaks at 27-28 bytes per
+/// vertex in 2 blocks and 37-38 in 8, 13.7 in one.
 fn cuts_that_fit<'a>(
     cuts: &'a [u32],
     whole: &'a [u32; 2],
@@ -780,7 +781,7 @@ mod tests {
     fn blocks_are_swept_only_where_their_glue_fits() {
         let whole = [0, 1000];
         let cuts = [0, 400, 700, 1000];
-        // 300 candidates and 60 band vertices: 72 bytes each.
+        // 300 candidates and 60 band vertices: 80 bytes each.
         let glue = 360 * GLUE_BYTES_PER_NODE;
         assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue)), cuts);
         assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue - 1)), whole);
