@@ -15,21 +15,18 @@ fn rows(stdout: &str) -> Vec<Vec<String>> {
         .collect()
 }
 
-#[test]
-fn threads_give_one_row_per_count_and_the_scaling_curve() {
+/// `flexiso bench EMPTY_DIR ARGS`: the built-in fields only.
+fn bench_built_in(args: &[&str]) -> common::Run {
     let empty = tempfile::tempdir().unwrap();
     let dir = empty.path().to_str().unwrap();
+    let all: Vec<&str> = ["bench", dir].iter().chain(args).copied().collect();
+    flexiso(&all)
+}
+
+#[test]
+fn threads_give_one_row_per_count_and_the_scaling_curve() {
     // Given unsorted and twice, the counts are run once each, fewest first.
-    let run = flexiso(&[
-        "bench",
-        dir,
-        "--smooth",
-        "24",
-        "--synthetic",
-        "20",
-        "--threads",
-        "3,1,3",
-    ]);
+    let run = bench_built_in(&["--smooth", "24", "--synthetic", "20", "--threads", "3,1,3"]);
     assert!(run.success(), "{}", run.stderr);
     let header = run.stdout.lines().next().unwrap();
     assert!(header.ends_with("threads   CPU s"), "{header}");
@@ -64,11 +61,7 @@ fn threads_give_one_row_per_count_and_the_scaling_curve() {
 
 #[test]
 fn only_picks_datasets_by_any_of_its_patterns_built_in_fields_too() {
-    let empty = tempfile::tempdir().unwrap();
-    let dir = empty.path().to_str().unwrap();
-    let run = flexiso(&[
-        "bench",
-        dir,
+    let run = bench_built_in(&[
         "--smooth",
         "16",
         "--synthetic",
