@@ -753,16 +753,17 @@ const CONSUMING_CHUNKS: usize = 2;
 
 /// The size of each superarc (its regular vertices), read off
 /// `vertex_arc` in id order on every core: a count per thread, summed,
-/// where those counts are small beside the vertices (smooth fields, few
-/// superarcs); otherwise one count cut into ranges of superarcs, up to
-/// [`COUNT_RANGES`], each counted by one thread reading every vertex. A
-/// count per thread on a noisy scan is a word per superarc per thread (0.6
-/// bytes per vertex each on tooth: 9.5 on 16 threads, above the build's
-/// peak), and one count shared by atomic increments was 10 ms slower on
-/// colin27_ch2 (0.27 s to the tree) than either.
+/// where those counts hold at most 2 bytes per vertex together (smooth
+/// fields; scans on 2 threads); otherwise one count cut into ranges of
+/// superarcs, up to [`COUNT_RANGES`], each counted by one thread reading
+/// every vertex. A count per thread on a noisy scan is a word per superarc
+/// per thread (0.6 bytes per vertex each on tooth: 9.5 on 16 threads,
+/// above the build's peak); the ranges cost 7-15 ms more on colin27_ch2
+/// on 2 threads (0.25 s to the tree), and one count shared by atomic
+/// increments was 10 ms slower.
 fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
     let threads = rayon::current_num_threads();
-    if arcs.saturating_mul(threads) > vertex_arc.len() / 16 {
+    if arcs.saturating_mul(threads).saturating_mul(2) > vertex_arc.len() {
         let mut count = vec![0u32; arcs];
         let per = arcs.div_ceil(threads.min(COUNT_RANGES)).max(1 << 12);
         count
