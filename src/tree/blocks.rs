@@ -63,17 +63,19 @@
 //! parent (in the first child's slot once the node is visited, and
 //! overwritten by its nearest candidate ancestor once the lists and the
 //! union-find are let go) and lowest candidate, and the candidates'
-//! parents and child counts; shared, the nodes' vertices, order and flags. All of it is released before the merge, and the free
-//! pages of the allocator's heaps go back to the system
+//! parents and child counts; shared, the nodes' vertices, order and
+//! flags. All of it is released before the merge, and the free pages of
+//! the allocator's heaps go back to the system
 //! ([`crate::pages::trim_freed`]). Bands cost two planes per cut: 2 (B -
 //! 1) X Y nodes for B blocks, about 1.5 % of a 512³ volume cut in 8.
 //!
 //! So blocks cost little on smooth fields (few nodes) and much on noisy
 //! scans, where the candidates are a third of the vertices: tooth peaks at
-//! 27-28 bytes per vertex beyond the values in 2 blocks and 37-38 in 8,
-//! against 13.7 swept whole (39 and 48 before the glue's tables were cut). The build sweeps the whole mesh instead wherever the
-//! glue would not fit in the memory left (`GLUE_BYTES_PER_NODE` in
-//! [`super`]): the same trees, on two cores.
+//! 29 bytes per vertex beyond the values in 2 blocks and 39 in 8, against
+//! 13.6 swept whole (39 and 48 before the glue's tables were cut). The
+//! build sweeps the whole mesh instead wherever the glue would not fit in
+//! the memory left (`GLUE_BYTES_PER_NODE` in [`super`]): the same trees,
+//! on two cores.
 //!
 //! **Blocks as values.** A block's result is plain data: its node list
 //! (vertex ids, ascending), its two block trees (parent and children per

@@ -308,8 +308,8 @@ const GLUE_BYTES_PER_NODE: u64 = 80;
 /// not fit in the memory `available` beyond what the build holds already
 /// (the order and the records), and then one block, the whole mesh, which
 /// gives the same trees. Where candidates are many (a noisy scan) the
-/// glue holds more than the whole sweep: tooth peaks at 27-28 bytes per
-/// vertex in 2 blocks and 37-38 in 8, 13.7 in one.
+/// glue holds more than the whole sweep: tooth peaks at 29 bytes per
+/// vertex in 2 blocks and 39 in 8, 13.6 in one.
 fn cuts_that_fit<'a>(
     cuts: &'a [u32],
     whole: &'a [u32; 2],
@@ -520,12 +520,12 @@ impl ContourTree {
             }
             _ => None,
         };
-        if let Some(available) = crate::field::io::available_memory() {
+        let available = crate::field::io::available_memory();
+        if let Some(available) = available {
             check_memory(n, candidates, order_bytes, remake.is_some(), available)?;
         }
         let whole = [0, n as u32];
         let band = blocks::band_vertices(cuts, n, mesh.edge_span());
-        let available = crate::field::io::available_memory();
         let cuts = cuts_that_fit(cuts, &whole, candidates, band, available);
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;

@@ -301,17 +301,15 @@ impl Block {
     /// The nodes of the block's trees: its candidates and its band, from
     /// the words of the whole mesh while they hold the link codes.
     pub fn count_nodes<W: Word>(&self, words: &[W]) -> usize {
-        let (lo, hi) = (self.lo as usize, self.hi as usize);
         let (ilo, ihi) = (
             self.inner_lo as usize,
             self.inner_hi.max(self.inner_lo) as usize,
         );
-        let band = (ilo - lo) + (hi - ihi);
         let candidates: usize = words[ilo..ihi]
             .par_chunks(1 << 16)
             .map(|c| c.iter().filter(|&&w| is_candidate(w.get() as u8)).count())
             .sum();
-        band + candidates
+        self.band_len() + candidates
     }
 }
 
