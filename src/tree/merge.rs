@@ -714,7 +714,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
         // on every core) rather than through the order.
         let count = arc_sizes(vertex_arc, arcs);
         if threads > 1 {
-            let slab = (threads * GATHER_CHUNKS * GATHER).max(SLAB);
+            let slab = (n / SLAB_SHARE).clamp(threads * GATHER_CHUNKS, SLAB);
             return scatter_by_arc_ranges(order, vertex_arc, count, slab);
         }
         vec![count]
@@ -742,8 +742,9 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
 }
 
 /// [`group_by_arc`] with many superarcs on several threads, given their
-/// sizes: the order is read in slabs of `slab` positions ([`SLAB`], or
-/// [`GATHER_CHUNKS`] tasks per thread); each slab's ids are gathered beside their superarcs on every
+/// sizes: the order is read in slabs of `slab` positions (a
+/// [`SLAB_SHARE`]th of the vertices, at most [`SLAB`]), each cut into
+/// [`GATHER_CHUNKS`] tasks per thread; each slab's ids are gathered beside their superarcs on every
 /// core (the scattered reads of `vertex_arc`), then each thread reads the
 /// whole slab in sequence (it stays in the cache) and writes the vertices
 /// of its own range of superarcs, the ranges balanced by their vertices.
@@ -788,14 +789,15 @@ fn scatter_by_arc_ranges(
     let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
     let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
     let slab = slab.clamp(1, n.max(1));
+    let gather = slab.div_ceil(threads * GATHER_CHUNKS);
     let mut pairs = vec![0u64; slab];
     for start in (0..n).step_by(slab) {
         let pairs = &mut pairs[..slab.min(n - start)];
         pairs
-            .par_chunks_mut(GATHER)
+            .par_chunks_mut(gather)
             .enumerate()
             .for_each(|(c, out)| {
-                let first = start + c * GATHER;
+                let first = start + c * gather;
                 let mut k = 0;
                 order.for_each_chunk(first..first + out.len(), |ids| {
                     for (i, &v) in ids.iter().enumerate() {
@@ -830,12 +832,14 @@ fn scatter_by_arc_ranges(
     (offsets, arc_vertices)
 }
 
-/// Positions of the order [`scatter_by_arc_ranges`] gathers at a time:
-/// 4 MiB of (id, superarc) pairs, which every thread then reads.
+/// Positions of the order [`scatter_by_arc_ranges`] gathers at a time, at
+/// most: 4 MiB of (id, superarc) pairs, which every thread then reads.
 const SLAB: usize = 1 << 19;
-/// Positions each task of its gathering reads.
-const GATHER: usize = 1 << 14;
-/// Tasks per thread in the gathering of a slab, at least.
+/// Or a this-th of the vertices where that is less: a quarter of a byte
+/// per vertex (the whole 4 MiB was 2.7 bytes per vertex on tooth, above
+/// the build's peak).
+const SLAB_SHARE: usize = 32;
+/// Tasks per thread in the gathering of a slab.
 const GATHER_CHUNKS: usize = 4;
 
 /// At most this many threads count the superarcs' sizes by ranges
