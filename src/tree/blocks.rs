@@ -50,7 +50,7 @@
 //! half the blocked sweeps' time. So each node also keeps a jump pointer
 //! up its chain (Myers' skew-binary pointers, one word per node), and the
 //! search takes O(log depth) steps: on one thread colin27_ch2's blocked
-//! sweeps went from 0.75 to 0.36 s in 2 blocks and white noise 192³'s
+//! sweeps went from 0.58-0.75 to 0.36-0.39 s in 2 blocks and white noise 192³'s
 //! from 13.0 to 3.8 s in 8.
 //!
 //! The result is the [`JoinTree`] and [`SplitTree`] of the whole sweep,

@@ -1182,7 +1182,7 @@ mod tests {
             prop_assert_eq!(&whole, &unpacked);
             // Read in slabs by ranges of superarcs on 5 threads.
             let slab = 1 + (hash(7) % 300) as usize;
-            let by_ranges = rayon::ThreadPoolBuilder::new().num_threads(5).build().unwrap().install(|| {
+            let by_ranges = rayon::ThreadPoolBuilder::new().num_threads(5).build().expect("a pool of 5 threads").install(|| {
                 scatter_by_arc_ranges(OrderView::Ids(&order), &vertex_arc, arc_sizes(&vertex_arc, arcs), slab)
             });
             prop_assert_eq!(&whole, &by_ranges);
