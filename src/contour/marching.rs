@@ -353,7 +353,11 @@ pub(crate) fn choose_normals(normals: &mut [[f32; 3]], downhill: &[[f32; 3]]) {
 #[inline(always)]
 fn plain_choice(n: [f32; 3], g: [f32; 3]) -> ([f32; 3], bool) {
     let (ln, lg) = (dot(n, n), dot(g, g));
-    let plain = plain_length(ln) & ((lg == 0.0) | plain_length(lg));
+    // No gradient at all, not one whose squared length underflows to zero
+    // (a gradient of 1e-23 still has a direction, which the careful path
+    // takes).
+    let vanished = (g[0] == 0.0) & (g[1] == 0.0) & (g[2] == 0.0);
+    let plain = plain_length(ln) & (vanished | plain_length(lg));
     let take = (lg != 0.0) & (dot(n, g) > 0.0);
     let (v, l) = if take { (g, lg) } else { (n, ln) };
     let r = l.sqrt().recip();
@@ -466,6 +470,21 @@ mod tests {
     fn pair() -> impl Strategy<Value = ([f32; 3], [f32; 3])> {
         let plain = || [-1e3f32..1e3, -1e3f32..1e3, -1e3f32..1e3];
         prop_oneof![40 => (plain(), plain()), 1 => (vector(), vector())]
+    }
+
+    /// A gradient whose squared length underflows in `f32` still has a
+    /// direction: it is taken where it agrees with the sum (the case a
+    /// proptest found), by the vertex and in blocks of eight.
+    #[test]
+    fn a_tiny_gradient_keeps_its_direction() {
+        let (n, g) = (
+            [-327.39874f32, -207.86232, 0.0],
+            [-5.8785055e-24f32, 0.0, 0.0],
+        );
+        assert_eq!(choose_normal(n, g), [-1.0, 0.0, 0.0]);
+        let mut blocked = vec![n; 8];
+        choose_normals(&mut blocked, &[g; 8]);
+        assert!(blocked.iter().all(|&b| b == [-1.0, 0.0, 0.0]));
     }
 
     proptest! {
