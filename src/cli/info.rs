@@ -55,7 +55,7 @@ pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
         .collect();
     let g = f.geometry();
     let n = f.len() as u64;
-    let (candidates, tree) = tree_memory(f);
+    let (candidates, blocks, tree) = tree_memory(f);
     serde_json::json!({
         "file": volume.path.display().to_string(),
         "format": volume.format,
@@ -71,6 +71,7 @@ pub fn report_json(volume: &Volume, bins: usize) -> serde_json::Value {
         "distinct": distinct(v),
         "histogram": { "edges": edges, "counts": counts },
         "candidates": candidates,
+        "blocks": blocks,
         "memory_bytes": n * v.bytes_per_value() as u64 + tree,
         "warnings": volume.warnings,
     })
@@ -161,10 +162,15 @@ pub fn report(volume: &Volume, bins: usize) -> String {
         );
     }
     let values = (n * v.bytes_per_value()) as u64;
-    let (candidates, tree) = tree_memory(f);
+    let (candidates, blocks, tree) = tree_memory(f);
+    let blocked = if blocks > 1 {
+        format!(", joined and split in {blocks} blocks")
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         out,
-        "memory:    values {} + contour tree {} at its peak ({candidates} candidate nodes, {:.1}% of the vertices) = about {}",
+        "memory:    values {} + contour tree {} at its peak ({candidates} candidate nodes, {:.1}% of the vertices{blocked}) = about {}",
         mib(values),
         mib(tree),
         candidates as f64 * 100.0 / n.max(1) as f64,
@@ -177,21 +183,25 @@ pub fn report(volume: &Volume, bins: usize) -> String {
 }
 
 /// The candidate nodes of the field (its link classification, without the
-/// sort) and the peak bytes the tree engine will hold beyond the values.
-fn tree_memory(f: &ScalarField) -> (usize, u64) {
+/// sort), the blocks the build would sweep in on this machine, and the
+/// peak bytes the tree engine will hold beyond the values.
+fn tree_memory(f: &ScalarField) -> (usize, usize, u64) {
+    use crate::mesh::Mesh as _;
+    use crate::tree::blocks;
     let mesh = f.mesh();
+    let n = f.len();
     let candidates = crate::with_values!(f.values(), v => crate::tree::sweep::count_candidates_of(&mesh, v.as_slice()));
     let counting = crate::field::sorts_by_counting(f.values());
-    let remade = crate::tree::remakes_order(f.len(), candidates, counting);
-    (
-        candidates,
-        crate::tree::peak_bytes(
-            f.len(),
-            candidates,
-            crate::field::order_bytes(f.values()),
-            remade,
-        ),
-    )
+    let remade = crate::tree::remakes_order(n, candidates, counting);
+    let order_bytes = crate::field::order_bytes(f.values());
+    let span = mesh.edge_span();
+    let blocks = blocks::default_blocks(n, span);
+    let band = blocks::band_vertices(&blocks::even_cuts(n, blocks), n, span);
+    let available = crate::field::io::available_memory();
+    let (peak, in_blocks) =
+        crate::tree::peak_bytes_in_blocks(n, candidates, order_bytes, remade, band, available);
+    let blocks = if in_blocks { blocks } else { 1 };
+    (candidates, blocks, peak)
 }
 
 /// A bin edge: integral values without decimals, others with four.

@@ -80,8 +80,10 @@
 //! 29 bytes per vertex beyond the values in 2 blocks and 39 in 8, against
 //! 13.6 swept whole (39 and 48 before the glue's tables were cut). The
 //! build sweeps the whole mesh instead wherever the glue would not fit in
-//! the memory left (`GLUE_BYTES_PER_NODE` in [`super`]): the same trees,
-//! on two cores.
+//! the memory left (`GLUE_BYTES_PER_NODE` and `GLUE_BYTES_PER_BAND_VERTEX`
+//! in [`super`]): the same trees, on two cores. `flexiso info` quotes the
+//! same model ([`super::peak_bytes_in_blocks`]) for the blocks this
+//! machine would use.
 //!
 //! **Blocks as values.** A block's result is plain data: its node list
 //! (vertex ids, ascending), its two block trees (parent and children per

@@ -250,6 +250,32 @@ pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: b
     peak_bytes_of(n, candidates, candidates / 2, order_bytes, order_remade)
 }
 
+/// [`peak_bytes`] for a build whose join and split trees are swept in
+/// blocks with `band` band vertices in all ([`blocks::band_vertices`]; 0
+/// for one block), and whether it keeps them: while the blocks are glued
+/// the build holds the order, the records and [`GLUE_BYTES_PER_NODE`] per
+/// node (candidate or band vertex), [`GLUE_BYTES_PER_BAND_VERTEX`] more
+/// per band vertex. Where that would not fit in
+/// `available` the build sweeps in one block ([`cuts_that_fit`]), and
+/// this is [`peak_bytes`] and false.
+pub fn peak_bytes_in_blocks(
+    n: usize,
+    candidates: usize,
+    order_bytes: u64,
+    order_remade: bool,
+    band: usize,
+    available: Option<u64>,
+) -> (u64, bool) {
+    let whole = peak_bytes(n, candidates, order_bytes, order_remade);
+    let glue = glue_bytes(candidates, band);
+    let held = order_bytes + records_bytes(candidates) * n as u64;
+    match available {
+        _ if band == 0 => (whole, false),
+        Some(available) if held.saturating_add(glue) > available => (whole, false),
+        _ => (whole.max(held.saturating_add(glue)), true),
+    }
+}
+
 /// [`peak_bytes`] with the number of supernodes known.
 fn peak_bytes_of(
     n: usize,
@@ -304,6 +330,19 @@ const SWEEP_BYTES_PER_CANDIDATE: u64 = 16;
 /// 2 and 8 blocks.
 const GLUE_BYTES_PER_NODE: u64 = 80;
 
+/// What a band vertex costs beyond that: the mesh edges across its cut,
+/// listed for both directions. `synthetic:256` in 8 blocks (918 K band
+/// vertices, a thousand candidates) peaked at 113 bytes per node beyond
+/// the order and the records.
+const GLUE_BYTES_PER_BAND_VERTEX: u64 = 40;
+
+/// What gluing blocks holds beyond the order and the records, with
+/// `band` band vertices in all.
+fn glue_bytes(candidates: usize, band: usize) -> u64 {
+    GLUE_BYTES_PER_NODE.saturating_mul((candidates + band) as u64)
+        + GLUE_BYTES_PER_BAND_VERTEX.saturating_mul(band as u64)
+}
+
 /// The cuts a build sweeps with: `cuts`, unless gluing their blocks would
 /// not fit in the memory `available` beyond what the build holds already
 /// (the order and the records), and then one block, the whole mesh, which
@@ -317,7 +356,7 @@ fn cuts_that_fit<'a>(
     band: usize,
     available: Option<u64>,
 ) -> &'a [u32] {
-    let glue = GLUE_BYTES_PER_NODE.saturating_mul((candidates + band) as u64);
+    let glue = glue_bytes(candidates, band);
     match available {
         Some(available) if cuts.len() > 2 && glue > available => whole,
         _ => cuts,
@@ -781,8 +820,9 @@ mod tests {
     fn blocks_are_swept_only_where_their_glue_fits() {
         let whole = [0, 1000];
         let cuts = [0, 400, 700, 1000];
-        // 300 candidates and 60 band vertices: 80 bytes each.
-        let glue = 360 * GLUE_BYTES_PER_NODE;
+        // 300 candidates and 60 band vertices: 80 bytes each, and 40 more
+        // a band vertex.
+        let glue = 360 * GLUE_BYTES_PER_NODE + 60 * GLUE_BYTES_PER_BAND_VERTEX;
         assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue)), cuts);
         assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, Some(glue - 1)), whole);
         assert_eq!(cuts_that_fit(&cuts, &whole, 300, 60, None), cuts);
@@ -793,6 +833,24 @@ mod tests {
         assert_eq!(blocks::band_vertices(&whole, 1000, 10), 0);
         // A block thinner than two spans is all band.
         assert_eq!(blocks::band_vertices(&[0, 500, 505, 1000], 1000, 10), 25);
+    }
+
+    #[test]
+    fn blocks_add_their_glue_to_the_peak_where_it_fits() {
+        let (n, k, order) = (1_000_000, 300_000, 1_000_000);
+        let whole = peak_bytes(n, k, order, false);
+        let peak = |k, band, available| peak_bytes_in_blocks(n, k, order, false, band, available);
+        assert_eq!(peak(k, 0, None), (whole, false));
+        // A third of the vertices candidates: the glue is the peak.
+        let glue = order + 6 * n as u64 + glue_bytes(k, 20_000);
+        assert!(glue > whole);
+        assert_eq!(peak(k, 20_000, None), (glue, true));
+        assert_eq!(peak(k, 20_000, Some(glue)), (glue, true));
+        // Where it does not fit, the build sweeps in one block.
+        assert_eq!(peak(k, 20_000, Some(glue - 1)), (whole, false));
+        // Few candidates (a smooth field): the whole sweep's peak stands.
+        let smooth = peak_bytes(n, 100, order, false);
+        assert_eq!(peak(100, 2_000, None), (smooth, true));
     }
 
     #[test]
