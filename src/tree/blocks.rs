@@ -536,21 +536,15 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             if a == NONE {
                 continue;
             }
-            let (a, j) = (a as usize, ancestor_lowest_jump[a as usize][JUMP]);
-            let jump = match j {
-                NONE => a as u32,
-                j => {
-                    let jj = ancestor_lowest_jump[j as usize][JUMP];
-                    let (j, jj) = (j as usize, jj as usize);
-                    if jj != NONE as usize && depth[a] - depth[j] == depth[j] - depth[jj] {
-                        jj as u32
-                    } else {
-                        a as u32
-                    }
-                }
+            let jump = |x: u32| ancestor_lowest_jump[x as usize][JUMP];
+            let depth_of = |x: u32| depth[x as usize];
+            let (j, jj) = match jump(a) {
+                NONE => (NONE, NONE),
+                j => (j, jump(j)),
             };
-            depth[g] = depth[a] + 1;
-            ancestor_lowest_jump[g][JUMP] = jump;
+            let spans_equal = jj != NONE && depth_of(a) - depth_of(j) == depth_of(j) - depth_of(jj);
+            ancestor_lowest_jump[g][JUMP] = if spans_equal { jj } else { a };
+            depth[g] = depth[a as usize] + 1;
         }
         Glued {
             parent,

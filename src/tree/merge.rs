@@ -695,8 +695,23 @@ impl Grouped {
 /// grouping of `order` by superarc. With few superarcs (smooth fields) the
 /// order is cut into chunks, each counted and placed by its own thread
 /// (slots of chunk `i` for an arc follow those of chunks before it);
-/// otherwise one pass, since per-chunk counts would outweigh the vertices.
+/// otherwise, since per-chunk counts would outweigh the vertices, one
+/// count, and the order read in slabs by ranges of superarcs
+/// ([`scatter_by_arc_ranges`]) on several threads.
 fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u32>, Vec<u32>) {
+    let threads = rayon::current_num_threads();
+    let slab = (order.len() / SLAB_SHARE).clamp(threads * GATHER_CHUNKS, SLAB);
+    group_by_arc_in(vertex_arc, arcs, order, slab)
+}
+
+/// [`group_by_arc`], reading the order in slabs of `slab` positions where
+/// it goes by ranges of superarcs.
+fn group_by_arc_in(
+    vertex_arc: &[u32],
+    arcs: usize,
+    order: OrderView<'_>,
+    slab: usize,
+) -> (Vec<u32>, Vec<u32>) {
     let n = order.len();
     let threads = rayon::current_num_threads();
     let chunks = if threads > 1 && arcs * threads * 4 <= n / 16 {
@@ -712,12 +727,7 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
         // One chunk: its counts are the superarcs' sizes, which any order
         // gives, so they are read off `vertex_arc` in id order (streaming,
         // on every core) rather than through the order.
-        let count = arc_sizes(vertex_arc, arcs);
-        if threads > 1 {
-            let slab = (n / SLAB_SHARE).clamp(threads * GATHER_CHUNKS, SLAB);
-            return scatter_by_arc_ranges(order, vertex_arc, count, slab);
-        }
-        vec![count]
+        vec![arc_sizes(vertex_arc, arcs)]
     } else {
         count_in_ranges(order, vertex_arc, arcs, &ranges)
     };
@@ -734,41 +744,46 @@ fn group_by_arc(vertex_arc: &[u32], arcs: usize, order: OrderView<'_>) -> (Vec<u
     offsets[arcs] = total;
     let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
     let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
-    // SAFETY: each (chunk, arc) owns a disjoint range of slots below
-    // `total`, as long as the chunk has vertices on the arc (the prefix
-    // sums above).
-    unsafe { scatter_ranges(order, vertex_arc, ranges, counts, &dst) };
+    if counts.len() == 1 && threads > 1 {
+        let next = counts.pop().expect("one count");
+        // SAFETY: each arc owns the slots from its offset to the next
+        // (the prefix sums above).
+        unsafe { scatter_by_arc_ranges(order, vertex_arc, &offsets, next, slab, &dst) };
+    } else {
+        // SAFETY: each (chunk, arc) owns a disjoint range of slots below
+        // `total`, as long as the chunk has vertices on the arc (the
+        // prefix sums above).
+        unsafe { scatter_ranges(order, vertex_arc, ranges, counts, &dst) };
+    }
     (offsets, arc_vertices)
 }
 
-/// [`group_by_arc`] with many superarcs on several threads, given their
-/// sizes: the order is read in slabs of `slab` positions (a
-/// [`SLAB_SHARE`]th of the vertices, at most [`SLAB`]), each cut into
-/// [`GATHER_CHUNKS`] tasks per thread; each slab's ids are gathered beside their superarcs on every
-/// core (the scattered reads of `vertex_arc`), then each thread reads the
-/// whole slab in sequence (it stays in the cache) and writes the vertices
-/// of its own range of superarcs, the ranges balanced by their vertices.
+/// Writes the regular vertices of each superarc to `dst`, in the order,
+/// those on arc `a` from slot `next[a]` on: the order read in slabs of
+/// `slab` positions, each cut into [`GATHER_CHUNKS`] tasks per thread;
+/// each slab's ids are gathered beside their superarcs on every core (the
+/// scattered reads of `vertex_arc`), then each thread reads the whole slab
+/// in sequence (it stays in the cache) and writes the vertices of its own
+/// range of superarcs, the ranges balanced by their vertices (`offsets`).
 /// No count per chunk of the order (a word per superarc and chunk, which
 /// outweighs the vertices on a scan) and no second pass through the order:
 /// each superarc's slots are written in the order by the one thread that
 /// owns it. Before, this grouping was one sequential pass (0.04 s of
 /// colin27_ch2's 0.25 s on 2 threads).
-fn scatter_by_arc_ranges(
+///
+/// # Safety
+/// Superarc `a`'s slots, from `next[a]` on as many as it has vertices, lie
+/// in `dst` and are no other's.
+unsafe fn scatter_by_arc_ranges(
     order: OrderView<'_>,
     vertex_arc: &[u32],
-    sizes: Vec<u32>,
+    offsets: &[u32],
+    mut next: Vec<u32>,
     slab: usize,
-) -> (Vec<u32>, Vec<u32>) {
-    let (n, arcs) = (order.len(), sizes.len());
-    // The sizes become each superarc's next slot.
-    let mut next = sizes;
-    let mut offsets = Vec::with_capacity(arcs + 1);
-    let mut total = 0u32;
-    for slot in next.iter_mut() {
-        offsets.push(total);
-        (*slot, total) = (total, total + *slot);
-    }
-    offsets.push(total);
+    dst: &crate::pages::DisjointSlots<'_, u32>,
+) {
+    let (n, arcs) = (order.len(), next.len());
+    let total = offsets[arcs];
     let threads = rayon::current_num_threads();
     // Thread t's superarcs start at the first whose slots start at or past
     // its share of the vertices.
@@ -786,8 +801,6 @@ fn scatter_by_arc_ranges(
         }
         (rest, first) = (tail, end);
     }
-    let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
-    let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
     let slab = slab.clamp(1, n.max(1));
     let gather = slab.div_ceil(threads * GATHER_CHUNKS);
     let mut pairs = vec![0u64; slab];
@@ -821,15 +834,14 @@ fn scatter_by_arc_ranges(
                     let i = ((p >> 32) as u32).wrapping_sub(first);
                     if i < len {
                         let slot = &mut next[i as usize];
-                        // SAFETY: superarc `first + i`'s slots are written
-                        // by this range's thread only, one per vertex on it.
+                        // SAFETY: superarc `first + i`'s slots are the
+                        // caller's for it, written by this range's thread.
                         unsafe { dst.write(*slot as usize, p as u32) };
                         *slot += 1;
                     }
                 }
             });
     }
-    (offsets, arc_vertices)
 }
 
 /// Positions of the order [`scatter_by_arc_ranges`] gathers at a time, at
@@ -1183,7 +1195,7 @@ mod tests {
             // Read in slabs by ranges of superarcs on 5 threads.
             let slab = 1 + (hash(7) % 300) as usize;
             let by_ranges = rayon::ThreadPoolBuilder::new().num_threads(5).build().expect("a pool of 5 threads").install(|| {
-                scatter_by_arc_ranges(OrderView::Ids(&order), &vertex_arc, arc_sizes(&vertex_arc, arcs), slab)
+                group_by_arc_in(&vertex_arc, arcs, OrderView::Ids(&order), slab)
             });
             prop_assert_eq!(&whole, &by_ranges);
             // And it is the grouping: each arc's vertices, in the order.

@@ -267,12 +267,12 @@ pub fn peak_bytes_in_blocks(
     available: Option<u64>,
 ) -> (u64, bool) {
     let whole = peak_bytes(n, candidates, order_bytes, order_remade);
-    let glue = glue_bytes(candidates, band);
     let held = order_bytes + records_bytes(candidates) * n as u64;
-    match available {
-        _ if band == 0 => (whole, false),
-        Some(available) if held.saturating_add(glue) > available => (whole, false),
-        _ => (whole.max(held.saturating_add(glue)), true),
+    if band > 0 && glue_fits(candidates, band, held, available) {
+        let glue = held.saturating_add(glue_bytes(candidates, band));
+        (whole.max(glue), true)
+    } else {
+        (whole, false)
     }
 }
 
@@ -343,6 +343,12 @@ fn glue_bytes(candidates: usize, band: usize) -> u64 {
         + GLUE_BYTES_PER_BAND_VERTEX.saturating_mul(band as u64)
 }
 
+/// True where the glue fits in the memory `available` beside the `held`
+/// bytes (none known: it fits).
+fn glue_fits(candidates: usize, band: usize, held: u64, available: Option<u64>) -> bool {
+    available.is_none_or(|a| held.saturating_add(glue_bytes(candidates, band)) <= a)
+}
+
 /// The cuts a build sweeps with: `cuts`, unless gluing their blocks would
 /// not fit in the memory `available` beyond what the build holds already
 /// (the order and the records), and then one block, the whole mesh, which
@@ -356,10 +362,11 @@ fn cuts_that_fit<'a>(
     band: usize,
     available: Option<u64>,
 ) -> &'a [u32] {
-    let glue = glue_bytes(candidates, band);
-    match available {
-        Some(available) if cuts.len() > 2 && glue > available => whole,
-        _ => cuts,
+    // The memory left is read with the order and the records held.
+    if cuts.len() > 2 && !glue_fits(candidates, band, 0, available) {
+        whole
+    } else {
+        cuts
     }
 }
 
