@@ -407,6 +407,59 @@ impl PackedOrder {
         }
         buf
     }
+
+    /// The ids at the positions `range` that lie in `ids`, in the order's
+    /// order, decoded into `buf`: a block of the divide and conquer reads
+    /// only the runs of its own blocks of ids, skipping the others
+    /// undecoded, so that B blocks do not decode the order B times.
+    pub fn read_within<'b>(
+        &self,
+        range: std::ops::Range<usize>,
+        ids: std::ops::Range<u32>,
+        buf: &'b mut Vec<u32>,
+    ) -> &'b [u32] {
+        buf.clear();
+        if range.is_empty() || ids.is_empty() {
+            return buf;
+        }
+        let (first, last) = (ids.start >> 16, (ids.end - 1) >> 16);
+        let mut pos = range.start;
+        let mut r = self.runs.partition_point(|run| run.start as usize <= pos) - 1;
+        while pos < range.end {
+            let run = self.runs[r];
+            let (end, bytes_end) = self
+                .runs
+                .get(r + 1)
+                .map_or((self.len, self.bytes.len()), |next| {
+                    (next.start as usize, next.offset as usize)
+                });
+            let end = end.min(range.end);
+            let block = run.block as u32;
+            if (first..=last).contains(&block) {
+                let at = buf.len();
+                buf.resize(at + end - pos, 0);
+                run.form.decode(
+                    &self.bytes[run.offset as usize..bytes_end],
+                    block << 16,
+                    pos - run.start as usize,
+                    &mut buf[at..],
+                );
+                // Only the blocks at the ends can hold ids outside.
+                if block == first || block == last {
+                    let mut kept = at;
+                    for i in at..buf.len() {
+                        let id = buf[i];
+                        buf[kept] = id;
+                        kept += ids.contains(&id) as usize;
+                    }
+                    buf.truncate(kept);
+                }
+            }
+            pos = end;
+            r += 1;
+        }
+        buf
+    }
 }
 /// A vertex order to read: borrowed ids or a [`PackedOrder`].
 #[derive(Clone, Copy, Debug)]
@@ -454,6 +507,31 @@ impl<'a> OrderView<'a> {
         match *self {
             OrderView::Ids(ids) => &ids[range],
             OrderView::Packed(p) => p.read(range, buf),
+        }
+    }
+
+    /// The ids at the positions `range` that lie in `ids`, in the order's
+    /// order, into `buf` ([`PackedOrder::read_within`] skips the runs of
+    /// other ids; plain ids are filtered, without a branch per id).
+    pub fn read_within<'b>(
+        &self,
+        range: std::ops::Range<usize>,
+        ids: std::ops::Range<u32>,
+        buf: &'b mut Vec<u32>,
+    ) -> &'b [u32] {
+        match *self {
+            OrderView::Ids(all) => {
+                let part = &all[range];
+                buf.resize(part.len(), 0);
+                let mut kept = 0;
+                for &v in part {
+                    buf[kept] = v;
+                    kept += ids.contains(&v) as usize;
+                }
+                buf.truncate(kept);
+                buf
+            }
+            OrderView::Packed(p) => p.read_within(range, ids, buf),
         }
     }
 
@@ -865,8 +943,15 @@ mod tests {
                 proptest::prop_assert_eq!(view.read(range.clone(), &mut buf), &plain[range.clone()]);
                 let mut chunks = Vec::new();
                 view.for_each_chunk(range.clone(), |ids| chunks.extend_from_slice(ids));
-                proptest::prop_assert_eq!(&chunks[..], &plain[range]);
+                proptest::prop_assert_eq!(&chunks[..], &plain[range.clone()]);
                 proptest::prop_assert_eq!(view.read(0..n, &mut buf), &plain[..]);
+                // Only the ids of a block: as the plain order filtered,
+                // across the 64 Ki blocks of ids or inside one.
+                let ids = (cut.0 * n as f64) as u32..(cut.1 * n as f64 + 70_000.0).min(n as f64) as u32;
+                let within: Vec<u32> = plain[range.clone()].iter().copied().filter(|v| ids.contains(v)).collect();
+                proptest::prop_assert_eq!(view.read_within(range.clone(), ids.clone(), &mut buf), &within[..]);
+                let whole = OrderView::Ids(&plain);
+                proptest::prop_assert_eq!(whole.read_within(range, ids, &mut buf), &within[..]);
             }
         }
     }

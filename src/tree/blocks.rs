@@ -17,7 +17,13 @@
 //! the paper's sweep does; a candidate inside uses its link components).
 //! It records each node's parent in the block's join (or split) tree on its
 //! nodes and, for every other vertex, the last node of the component it
-//! joined, exactly as the whole sweep does. A block tree is a join tree on
+//! joined, exactly as the whole sweep does. Each block reads the whole
+//! vertex order for its own vertices: a packed order (8-bit values) is
+//! read only in the runs of the block's ids, the others skipped undecoded
+//! ([`crate::field::PackedOrder::read_within`]); plain ids are filtered.
+//! Decoding all of it in each of 8 blocks had made colin27_ch2better's
+//! block sweeps 2.5 times the whole sweeps' work (1.32 s against 0.53 on
+//! one thread). A block tree is a join tree on
 //! its nodes, so two nodes are in one superlevel component of the block
 //! exactly when they are in one component of the tree edges above that
 //! level.
@@ -234,16 +240,23 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     by_order
         .par_sort_by(|&a, &b| values.ordering(node_vertex[a as usize], node_vertex[b as usize]));
     progress.check(0, 1)?;
-    // The mesh edges across the cuts, from each band in id order: (node,
-    // neighbour node) with the neighbour above (join) or below (split).
+    // The mesh edges across the cuts: (node, neighbour node) with the
+    // neighbour above (join) or below (split), from each block's band
+    // vertices in the order of their nodes, so that the lists come sorted
+    // by node (a sort of them took a third of the glue).
     let block_of = |v: u32| blocks.partition_point(|b| b.hi <= v);
     let (join_crossing, split_crossing): (Vec<_>, Vec<_>) = blocks
         .par_iter()
-        .map(|block| {
+        .enumerate()
+        .map(|(b, block)| {
             let (mut above, mut below) = (Vec::new(), Vec::new());
             let node = |w: u32| offset[block_of(w)] + (split_words.get(w as usize) & !CANDIDATE);
-            for u in block.band() {
-                let gu = node(u);
+            for gu in offset[b]..offset[b + 1] {
+                let u = node_vertex[gu as usize];
+                if !block.in_band(u) {
+                    continue;
+                }
+                debug_assert_eq!(node(u), gu);
                 mesh.for_each_neighbour(u, |w| {
                     if !block.contains(w) {
                         debug_assert!(
@@ -423,8 +436,9 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             }
         }
         drop(trees);
-        let mut across: Vec<(u32, u32)> = crossing.iter().flatten().copied().collect();
-        across.sort_unstable();
+        // Sorted by node: each block lists its nodes' edges in node order.
+        let across: Vec<(u32, u32)> = crossing.iter().flatten().copied().collect();
+        debug_assert!(across.is_sorted_by_key(|&(g, _)| g));
         let mut crosses = vec![0u64; k.div_ceil(64)];
         for &(g, _) in &across {
             crosses[g as usize / 64] |= 1 << (g % 64);

@@ -286,14 +286,8 @@ impl Block {
         v < self.inner_lo || v >= self.inner_hi
     }
 
-    /// The band's vertices, ascending.
-    pub fn band(&self) -> impl Iterator<Item = u32> {
-        // If the block is thinner than two spans, inner_hi < inner_lo and
-        // the two ranges meet at inner_lo.
-        (self.lo..self.inner_lo).chain(self.inner_hi.max(self.inner_lo)..self.hi)
-    }
-
-    /// The number of vertices in the band.
+    /// The number of vertices in the band (if the block is thinner than
+    /// two spans, inner_hi < inner_lo and the band is the whole block).
     pub fn band_len(&self) -> usize {
         ((self.inner_lo - self.lo) + (self.hi - self.inner_hi.max(self.inner_lo))) as usize
     }
@@ -399,27 +393,17 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
         }
         let end = (start + CHUNK).min(n);
         let range = if join { n - end..n - start } else { start..end };
-        let part = order.read(range, &mut ids);
-        // The vertices to visit, `seq` read backwards if `rev`: the order
-        // itself for the whole mesh, else the block's vertices of it,
-        // filtered without a branch per vertex (whether the next vertex of
-        // the order is in the block is a coin toss for the predictor).
-        let (seq, rev) = if !BLOCKED {
-            (part, join)
+        // The vertices to visit, read backwards in the join sweep: the
+        // order itself for the whole mesh, else the block's vertices of it
+        // (filtered without a branch per vertex: whether the next vertex
+        // of the order is in the block is a coin toss for the predictor;
+        // a packed order skips the other blocks' runs undecoded).
+        let seq = if !BLOCKED {
+            order.read(range, &mut ids)
         } else {
-            visit.resize(CHUNK, 0);
-            let mut len = 0;
-            let mut keep = |v: u32| {
-                visit[len] = v;
-                len += block.contains(v) as usize;
-            };
-            if join {
-                part.iter().rev().for_each(|&v| keep(v));
-            } else {
-                part.iter().for_each(|&v| keep(v));
-            }
-            (&visit[..len], false)
+            order.read_within(range, block.lo..block.hi, &mut visit)
         };
+        let rev = join;
         let m = seq.len();
         let at = |i: usize| if rev { seq[m - 1 - i] } else { seq[i] };
         for i in 0..m {
