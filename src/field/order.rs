@@ -380,31 +380,13 @@ impl PackedOrder {
     /// The ids at the positions `range`, decoded into `buf`.
     pub fn read<'b>(&self, range: std::ops::Range<usize>, buf: &'b mut Vec<u32>) -> &'b [u32] {
         buf.clear();
-        if range.is_empty() {
-            return buf;
-        }
         buf.resize(range.len(), 0);
-        let mut pos = range.start;
-        // The run holding `pos` is the last one starting at or before it.
-        let mut r = self.runs.partition_point(|run| run.start as usize <= pos) - 1;
-        while pos < range.end {
-            let run = self.runs[r];
-            let (end, bytes_end) = self
-                .runs
-                .get(r + 1)
-                .map_or((self.len, self.bytes.len()), |next| {
-                    (next.start as usize, next.offset as usize)
-                });
-            let end = end.min(range.end);
-            run.form.decode(
-                &self.bytes[run.offset as usize..bytes_end],
-                (run.block as u32) << 16,
-                pos - run.start as usize,
-                &mut buf[pos - range.start..end - range.start],
-            );
-            pos = end;
-            r += 1;
-        }
+        let mut at = 0;
+        self.for_each_run(range, |run, bytes, skip, len| {
+            let out = &mut buf[at..at + len];
+            run.form.decode(bytes, (run.block as u32) << 16, skip, out);
+            at += len;
+        });
         buf
     }
 
@@ -419,11 +401,38 @@ impl PackedOrder {
         buf: &'b mut Vec<u32>,
     ) -> &'b [u32] {
         buf.clear();
-        if range.is_empty() || ids.is_empty() {
+        if ids.is_empty() {
             return buf;
         }
         let (first, last) = (ids.start >> 16, (ids.end - 1) >> 16);
+        self.for_each_run(range, |run, bytes, skip, len| {
+            let block = run.block as u32;
+            if !(first..=last).contains(&block) {
+                return;
+            }
+            let at = buf.len();
+            buf.resize(at + len, 0);
+            run.form.decode(bytes, block << 16, skip, &mut buf[at..]);
+            // Only the blocks at the ends can hold ids outside.
+            if block == first || block == last {
+                keep_within(buf, at, &ids);
+            }
+        });
+        buf
+    }
+
+    /// Calls `f(run, its bytes, positions to skip into it, positions to
+    /// read)` for each run that holds positions of `range`, in order.
+    fn for_each_run(
+        &self,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(Run, &[u8], usize, usize),
+    ) {
+        if range.is_empty() {
+            return;
+        }
         let mut pos = range.start;
+        // The run holding `pos` is the last one starting at or before it.
         let mut r = self.runs.partition_point(|run| run.start as usize <= pos) - 1;
         while pos < range.end {
             let run = self.runs[r];
@@ -434,33 +443,32 @@ impl PackedOrder {
                     (next.start as usize, next.offset as usize)
                 });
             let end = end.min(range.end);
-            let block = run.block as u32;
-            if (first..=last).contains(&block) {
-                let at = buf.len();
-                buf.resize(at + end - pos, 0);
-                run.form.decode(
-                    &self.bytes[run.offset as usize..bytes_end],
-                    block << 16,
-                    pos - run.start as usize,
-                    &mut buf[at..],
-                );
-                // Only the blocks at the ends can hold ids outside.
-                if block == first || block == last {
-                    let mut kept = at;
-                    for i in at..buf.len() {
-                        let id = buf[i];
-                        buf[kept] = id;
-                        kept += ids.contains(&id) as usize;
-                    }
-                    buf.truncate(kept);
-                }
-            }
+            let skip = pos - run.start as usize;
+            f(
+                run,
+                &self.bytes[run.offset as usize..bytes_end],
+                skip,
+                end - pos,
+            );
             pos = end;
             r += 1;
         }
-        buf
     }
 }
+
+/// Keeps, of `buf[from..]`, the ids in `ids`, in place and in order,
+/// without a branch per id (whether the next id of an order is in a block
+/// is a coin toss for the predictor).
+fn keep_within(buf: &mut Vec<u32>, from: usize, ids: &std::ops::Range<u32>) {
+    let mut kept = from;
+    for i in from..buf.len() {
+        let id = buf[i];
+        buf[kept] = id;
+        kept += ids.contains(&id) as usize;
+    }
+    buf.truncate(kept);
+}
+
 /// A vertex order to read: borrowed ids or a [`PackedOrder`].
 #[derive(Clone, Copy, Debug)]
 pub enum OrderView<'a> {
@@ -512,7 +520,7 @@ impl<'a> OrderView<'a> {
 
     /// The ids at the positions `range` that lie in `ids`, in the order's
     /// order, into `buf` ([`PackedOrder::read_within`] skips the runs of
-    /// other ids; plain ids are filtered, without a branch per id).
+    /// other ids; plain ids are all read and filtered).
     pub fn read_within<'b>(
         &self,
         range: std::ops::Range<usize>,
@@ -521,14 +529,9 @@ impl<'a> OrderView<'a> {
     ) -> &'b [u32] {
         match *self {
             OrderView::Ids(all) => {
-                let part = &all[range];
-                buf.resize(part.len(), 0);
-                let mut kept = 0;
-                for &v in part {
-                    buf[kept] = v;
-                    kept += ids.contains(&v) as usize;
-                }
-                buf.truncate(kept);
+                buf.clear();
+                buf.extend_from_slice(&all[range]);
+                keep_within(buf, 0, &ids);
                 buf
             }
             OrderView::Packed(p) => p.read_within(range, ids, buf),

@@ -395,9 +395,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
         let range = if join { n - end..n - start } else { start..end };
         // The vertices to visit, read backwards in the join sweep: the
         // order itself for the whole mesh, else the block's vertices of it
-        // (filtered without a branch per vertex: whether the next vertex
-        // of the order is in the block is a coin toss for the predictor;
-        // a packed order skips the other blocks' runs undecoded).
+        // (a packed order skips the other blocks' runs undecoded).
         let seq = if !BLOCKED {
             order.read(range, &mut ids)
         } else {
