@@ -23,10 +23,9 @@
 //! ([`crate::field::PackedOrder::read_within`]); plain ids are filtered.
 //! Decoding all of it in each of 8 blocks had made colin27_ch2better's
 //! block sweeps 2.5 times the whole sweeps' work (1.32 s against 0.53 on
-//! one thread). A block tree is a join tree on
-//! its nodes, so two nodes are in one superlevel component of the block
-//! exactly when they are in one component of the tree edges above that
-//! level.
+//! one thread). A block tree is a join tree on its nodes, so two nodes are
+//! in one superlevel component of the block exactly when they are in one
+//! component of the tree edges above that level.
 //!
 //! **2. The glue.** The union of the block trees and of the mesh edges that
 //! cross a cut (both ends are band vertices, hence nodes) is a graph on all
@@ -56,8 +55,8 @@
 //! half the blocked sweeps' time. So each node also keeps a jump pointer
 //! up its chain (Myers' skew-binary pointers, one word per node), and the
 //! search takes O(log depth) steps: on one thread colin27_ch2's blocked
-//! sweeps went from 0.58-0.75 to 0.36-0.39 s in 2 blocks and white noise 192³'s
-//! from 13.0 to 3.8 s in 8.
+//! sweeps went from 0.58-0.75 to 0.36-0.39 s in 2 blocks and white noise
+//! 192³'s from 13.0 to 3.8 s in 8.
 //!
 //! The result is the [`JoinTree`] and [`SplitTree`] of the whole sweep,
 //! word for word (the tests compare them), so merge and augmentation do not
@@ -76,10 +75,11 @@
 //! nodes' vertices, order and flags. Once the lists and the union-find are
 //! let go, each node's nearest candidate ancestor, lowest candidate and
 //! jump pointer lie side by side (12 bytes, and a depth per node while
-//! the pointers are made): the peak of the tables above is unchanged. All of it is released before the merge, and the free pages of
-//! the allocator's heaps go back to the system
-//! ([`crate::pages::trim_freed`]). Bands cost two planes per cut: 2 (B -
-//! 1) X Y nodes for B blocks, about 1.5 % of a 512³ volume cut in 8.
+//! the pointers are made): the peak of the tables above is unchanged. All
+//! of it is released before the merge, and the free pages of the
+//! allocator's heaps go back to the system ([`crate::pages::trim_freed`]).
+//! Bands cost two planes per cut: 2 (B - 1) X Y nodes for B blocks, about
+//! 1.5 % of a 512³ volume cut in 8.
 //!
 //! So blocks cost little on smooth fields (few nodes) and much on noisy
 //! scans, where the candidates are a third of the vertices: tooth peaks at

@@ -399,8 +399,9 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
         // the block's vertices of it (a packed order skips the other
         // blocks' runs undecoded); copied backwards for the join sweep. A
         // tight copy reads the order downwards at full speed; the sweep's
-        // loop reading it downwards between its stalls took 8 % longer on
-        // `synthetic:256` (join sweep 0.115-0.119 s, now 0.106-0.108).
+        // loop reading it downwards between its stalls was slower (one
+        // thread, `synthetic:256`'s join sweep 0.104-0.107 s, now
+        // 0.098-0.102).
         let seq = if !BLOCKED {
             order.read(range, &mut ids)
         } else {
