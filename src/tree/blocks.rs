@@ -74,8 +74,8 @@
 //! candidate, and the candidates' parents and child counts; shared, the
 //! nodes' vertices, order and flags. Once the lists and the union-find are
 //! let go, each node's nearest candidate ancestor, lowest candidate and
-//! jump pointer lie side by side (12 bytes, and a depth per node while
-//! the pointers are made): the peak of the tables above is unchanged. All
+//! jump pointer with its span lie side by side (16 bytes): the peak of
+//! the tables above is unchanged. All
 //! of it is released before the merge, and the free pages of the
 //! allocator's heaps go back to the system ([`crate::pages::trim_freed`]).
 //! Bands cost two planes per cut: 2 (B - 1) X Y nodes for B blocks, about
@@ -376,16 +376,19 @@ struct Glued {
     /// Per node: its nearest candidate ancestor in the glued tree (the
     /// tree of the nodes: a node's parent absorbed its component while it
     /// was the component's last node), `NONE` if it has none; the lowest
-    /// candidate of its subtree (join) / highest (split), by number; and a
-    /// jump pointer up its chain of candidate ancestors. Step 3 climbs
-    /// through the first and third and reads the second where it stops.
-    ancestor_lowest_jump: Vec<[u32; 3]>,
+    /// candidate of its subtree (join) / highest (split), by number, with
+    /// [`CANDIDATE`] set where the node is itself a candidate (its word
+    /// once glued); a jump pointer up its chain of candidate ancestors;
+    /// and the number of ancestors the jump spans. Step 3 climbs through
+    /// the first and third and reads the second where it stops.
+    ancestor_lowest_jump: Vec<[u32; 4]>,
 }
 
 /// The fields of [`Glued::ancestor_lowest_jump`].
 const ANCESTOR: usize = 0;
 const LOWEST: usize = 1;
 const JUMP: usize = 2;
+const SPAN: usize = 3;
 
 /// What both glues read.
 struct Gluing<'a, O: ?Sized> {
@@ -534,15 +537,20 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         // before its children), written over its parent: step 3 climbs
         // from candidate to candidate. Beside it a jump pointer up the
         // same chain (Myers' skew-binary pointers: a node jumps where its
-        // ancestor's jump jumps when the two jumps span equal depths, else
-        // to that ancestor), so that the climb takes O(log depth) steps.
-        let mut ancestor_lowest_jump: Vec<[u32; 3]> = link
+        // ancestor's jump jumps when the two jumps span equal numbers of
+        // ancestors, else to that ancestor), so that the climb takes
+        // O(log depth) steps. Each node keeps its jump's span beside the
+        // jump, not a depth in another array: the pass reads a node's
+        // ancestor and that ancestor's jump, two lines (one thread, 8
+        // blocks: colin27_ch2better's pass took 26 ms per direction with
+        // the depths and flags apart).
+        let mut ancestor_lowest_jump: Vec<[u32; 4]> = link
             .iter()
             .zip(&lowest)
-            .map(|(&p, &l)| [p, l, NONE])
+            .zip(self.candidate)
+            .map(|((&p, &l), &c)| [p, if c { CANDIDATE | l } else { l }, NONE, 0])
             .collect();
         drop((link, lowest));
-        let mut depth = vec![0u32; k];
         let root_first: Box<dyn Iterator<Item = &u32>> = if join {
             Box::new(self.by_order.iter())
         } else {
@@ -554,24 +562,30 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             if p == NONE {
                 continue;
             }
-            let a = if self.candidate[p as usize] {
-                p
-            } else {
-                ancestor_lowest_jump[p as usize][ANCESTOR]
-            };
-            ancestor_lowest_jump[g][ANCESTOR] = a;
-            if a == NONE {
+            let parent = ancestor_lowest_jump[p as usize];
+            let (a, of_a) = if parent[LOWEST] & CANDIDATE != 0 {
+                (p, parent)
+            } else if parent[ANCESTOR] == NONE {
+                ancestor_lowest_jump[g][ANCESTOR] = NONE;
                 continue;
-            }
-            let jump = |x: u32| ancestor_lowest_jump[x as usize][JUMP];
-            let depth_of = |x: u32| depth[x as usize];
-            let (j, jj) = match jump(a) {
-                NONE => (NONE, NONE),
-                j => (j, jump(j)),
+            } else {
+                (
+                    parent[ANCESTOR],
+                    ancestor_lowest_jump[parent[ANCESTOR] as usize],
+                )
             };
-            let spans_equal = jj != NONE && depth_of(a) - depth_of(j) == depth_of(j) - depth_of(jj);
-            ancestor_lowest_jump[g][JUMP] = if spans_equal { jj } else { a };
-            depth[g] = depth[a as usize] + 1;
+            let (jump, span) = match of_a[JUMP] {
+                NONE => (a, 1),
+                j => {
+                    let of_j = ancestor_lowest_jump[j as usize];
+                    if of_j[JUMP] != NONE && of_j[SPAN] == of_a[SPAN] {
+                        (of_j[JUMP], 1 + 2 * of_a[SPAN])
+                    } else {
+                        (a, 1)
+                    }
+                }
+            };
+            ancestor_lowest_jump[g] = [a, ancestor_lowest_jump[g][LOWEST], jump, span];
         }
         Glued {
             parent,
@@ -599,8 +613,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                             // A node: a candidate's own number, flagged,
                             // or the lowest candidate a band vertex joined.
                             let g = (base + (w & !CANDIDATE)) as usize;
-                            let c = glued.ancestor_lowest_jump[g][LOWEST];
-                            *word = W::of(if self.candidate[g] { CANDIDATE | c } else { c });
+                            *word = W::of(glued.ancestor_lowest_jump[g][LOWEST]);
                             continue;
                         }
                         let v = first + i as u32;
@@ -615,9 +628,9 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                         let mut x = base + w;
                         let before = |g: u32| self.before(join, self.node_vertex[g as usize], v);
                         let lowest = loop {
-                            let [c, lowest, j] = glued.ancestor_lowest_jump[x as usize];
+                            let [c, lowest, j, _] = glued.ancestor_lowest_jump[x as usize];
                             if c == NONE || !before(c) {
-                                break lowest;
+                                break lowest & !CANDIDATE;
                             }
                             x = if j != c && before(j) { j } else { c };
                         };
