@@ -74,8 +74,9 @@
 //! candidate, and the candidates' parents and child counts; shared, the
 //! nodes' vertices, order and flags. Once the lists and the union-find are
 //! let go, each node's nearest candidate ancestor, lowest candidate and
-//! jump pointer with its span lie side by side (16 bytes): the peak of
-//! the tables above is unchanged. All
+//! jump pointer lie side by side (12 bytes, and the span of each jump
+//! while the pointers are made): the peak of the tables above is
+//! unchanged. All
 //! of it is released before the merge, and the free pages of the
 //! allocator's heaps go back to the system ([`crate::pages::trim_freed`]).
 //! Bands cost two planes per cut: 2 (B - 1) X Y nodes for B blocks, about
@@ -378,17 +379,16 @@ struct Glued {
     /// was the component's last node), `NONE` if it has none; the lowest
     /// candidate of its subtree (join) / highest (split), by number, with
     /// [`CANDIDATE`] set where the node is itself a candidate (its word
-    /// once glued); a jump pointer up its chain of candidate ancestors;
-    /// and the number of ancestors the jump spans. Step 3 climbs through
-    /// the first and third and reads the second where it stops.
-    ancestor_lowest_jump: Vec<[u32; 4]>,
+    /// once glued); and a jump pointer up its chain of candidate
+    /// ancestors. Step 3 climbs through the first and third and reads the
+    /// second where it stops.
+    ancestor_lowest_jump: Vec<[u32; 3]>,
 }
 
 /// The fields of [`Glued::ancestor_lowest_jump`].
 const ANCESTOR: usize = 0;
 const LOWEST: usize = 1;
 const JUMP: usize = 2;
-const SPAN: usize = 3;
 
 /// What both glues read.
 struct Gluing<'a, O: ?Sized> {
@@ -543,18 +543,21 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         // same chain (Myers' skew-binary pointers: a node jumps where its
         // ancestor's jump jumps when the two jumps span equal numbers of
         // ancestors, else to that ancestor), so that the climb takes
-        // O(log depth) steps. Each node keeps its jump's span beside the
-        // jump, not a depth in another array: the pass reads a node's
-        // ancestor and that ancestor's jump, two lines (one thread, 8
-        // blocks: colin27_ch2better's pass took 26 ms per direction with
-        // the depths and flags apart).
-        let mut ancestor_lowest_jump: Vec<[u32; 4]> = link
+        // O(log depth) steps. The pass keeps the number of ancestors each
+        // jump spans (not the depths: two reads per node, not three) and
+        // finds the candidates by their flag beside their lowest candidate
+        // (one thread, 8 blocks: colin27_ch2better's pass 26 -> 20 ms per
+        // direction). The spans lie apart, let go after the pass: beside
+        // the jumps they were 4 bytes more per node when the table is made
+        // from the parents and lowest candidates, the glue's peak.
+        let mut ancestor_lowest_jump: Vec<[u32; 3]> = link
             .iter()
             .zip(&lowest)
             .zip(self.candidate)
-            .map(|((&p, &l), &c)| [p, if c { CANDIDATE | l } else { l }, NONE, 0])
+            .map(|((&p, &l), &c)| [p, if c { CANDIDATE | l } else { l }, NONE])
             .collect();
         drop((link, lowest));
+        let mut span = vec![0u32; k];
         let root_first: Box<dyn Iterator<Item = &u32>> = if join {
             Box::new(self.by_order.iter())
         } else {
@@ -567,29 +570,27 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 continue;
             }
             let parent = ancestor_lowest_jump[p as usize];
-            let (a, of_a) = if parent[LOWEST] & CANDIDATE != 0 {
-                (p, parent)
-            } else if parent[ANCESTOR] == NONE {
-                ancestor_lowest_jump[g][ANCESTOR] = NONE;
-                continue;
+            let a = if parent[LOWEST] & CANDIDATE != 0 {
+                p
             } else {
-                (
-                    parent[ANCESTOR],
-                    ancestor_lowest_jump[parent[ANCESTOR] as usize],
-                )
+                parent[ANCESTOR]
             };
-            let (jump, span) = match of_a[JUMP] {
-                NONE => (a, 1),
-                j => {
-                    let of_j = ancestor_lowest_jump[j as usize];
-                    if of_j[JUMP] != NONE && of_j[SPAN] == of_a[SPAN] {
-                        (of_j[JUMP], 1 + 2 * of_a[SPAN])
-                    } else {
-                        (a, 1)
-                    }
-                }
+            ancestor_lowest_jump[g][ANCESTOR] = a;
+            if a == NONE {
+                continue;
+            }
+            let (a, j) = (a as usize, ancestor_lowest_jump[a as usize][JUMP]);
+            let jj = if j == NONE {
+                NONE
+            } else {
+                ancestor_lowest_jump[j as usize][JUMP]
             };
-            ancestor_lowest_jump[g] = [a, ancestor_lowest_jump[g][LOWEST], jump, span];
+            (ancestor_lowest_jump[g][JUMP], span[g]) = if jj != NONE && span[j as usize] == span[a]
+            {
+                (jj, 1 + 2 * span[a])
+            } else {
+                (a as u32, 1)
+            };
         }
         Glued {
             parent,
@@ -632,7 +633,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                         let mut x = base + w;
                         let before = |g: u32| self.before(join, self.node_vertex[g as usize], v);
                         let lowest = loop {
-                            let [c, lowest, j, _] = glued.ancestor_lowest_jump[x as usize];
+                            let [c, lowest, j] = glued.ancestor_lowest_jump[x as usize];
                             if c == NONE || !before(c) {
                                 break lowest & !CANDIDATE;
                             }
