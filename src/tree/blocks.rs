@@ -67,17 +67,18 @@
 //! a block numbers its nodes in its words); the blocks' union-finds are
 //! per node, as the whole sweep's are per candidate. The glue holds 57-73
 //! bytes per node at its peak, both directions at once (measured on tooth
-//! in 2 and 8 blocks): per direction each node's block-tree children,
-//! threaded through two arrays (the block trees are let go once they are),
-//! the edges across the cuts (each block's, in node order), its union-find, each node's
-//! parent (in the first child's slot once the node is visited) and lowest
-//! candidate, and the candidates' parents and child counts; shared, the
-//! nodes' vertices, order and flags. Once the lists and the union-find are
-//! let go, each node's nearest candidate ancestor, lowest candidate and
-//! jump pointer lie side by side (12 bytes, and the span of each jump
-//! while the pointers are made): the peak of the tables above is
-//! unchanged. All
-//! of it is released before the merge, and the free pages of the
+//! in 2 and 8 blocks, before the glue read the edges across the cuts in
+//! place of a sorted copy: 8 bytes per such edge less now): per direction
+//! each node's block-tree children, threaded through two arrays (the
+//! block trees are let go once they are), the edges across the cuts (each
+//! block's, in node order), its union-find, each node's parent (in the
+//! first child's slot once the node is visited) and lowest candidate, and
+//! the candidates' parents and child counts; shared, the nodes' vertices,
+//! order and flags. Once the lists and the union-find are let go, each
+//! node's nearest candidate ancestor, lowest candidate and jump pointer
+//! lie side by side (12 bytes, and the span of each jump while the
+//! pointers are made): the peak of the tables above is unchanged. All of
+//! it is released before the merge, and the free pages of the
 //! allocator's heaps go back to the system ([`crate::pages::trim_freed`]).
 //! Bands cost two planes per cut: 2 (B - 1) X Y nodes for B blocks, about
 //! 1.5 % of a 512³ volume cut in 8.
@@ -554,8 +555,8 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         // O(log depth) steps. The pass keeps the number of ancestors each
         // jump spans (not the depths: two reads per node, not three) and
         // finds the candidates by their flag beside their lowest candidate
-        // (one thread, 8 blocks: colin27_ch2better's pass 26 -> 20 ms per
-        // direction). The spans lie apart, let go after the pass: beside
+        // (one thread, 8 blocks: colin27_ch2better's pass 24-26 -> 20-21
+        // ms per direction). The spans lie apart, let go after the pass: beside
         // the jumps they were 4 bytes more per node when the table is made
         // from the parents and lowest candidates, the glue's peak.
         let mut ancestor_lowest_jump: Vec<[u32; 3]> = link
@@ -593,12 +594,13 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             } else {
                 ancestor_lowest_jump[j as usize][JUMP]
             };
-            (ancestor_lowest_jump[g][JUMP], span[g]) = if jj != NONE && span[j as usize] == span[a]
-            {
+            let (jump, spans) = if jj != NONE && span[j as usize] == span[a] {
                 (jj, 1 + 2 * span[a])
             } else {
                 (a as u32, 1)
             };
+            ancestor_lowest_jump[g][JUMP] = jump;
+            span[g] = spans;
         }
         Glued {
             parent,
