@@ -103,7 +103,7 @@
 //! nodes (candidates and bands) cross the wire: a few per cent of the
 //! vertices on smooth fields.
 
-use super::leafward::{self, Word, with_both_words, with_words};
+use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
     link_rank, union,
@@ -285,36 +285,40 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         candidate: &candidate,
         by_order: &by_order,
     };
-    let (join_glue, split_glue) = rayon::join(
-        || gluing.glue(true, join_trees, &join_crossing),
-        || gluing.glue(false, split_trees, &split_crossing),
-    );
-    drop((join_crossing, split_crossing));
+    // 2 and 3, each direction on its own: its glue, then every vertex's
+    // final word, on the cores the other glue leaves idle (a glue is one
+    // sequential pass); each lets its edges across go once glued.
+    let glue_and_place = |join: bool,
+                          trees: Vec<BlockTree>,
+                          crossing: Vec<Vec<(u32, u32)>>,
+                          words: &mut Leafward| {
+        let glued = gluing.glue(join, trees, &crossing);
+        drop(crossing);
+        if !progress.is_cancelled() {
+            with_words!(words, w => gluing.place(join, &glued, w));
+        }
+        (glued.parent, glued.children, glued.vertex)
+    };
+    let ((join_parent, join_children, _), (split_parent, split_children, split_vertex)) =
+        rayon::join(
+            || glue_and_place(true, join_trees, join_crossing, &mut join_words),
+            || glue_and_place(false, split_trees, split_crossing, &mut split_words),
+        );
     progress.check(0, 1)?;
-
-    // 3. Every vertex's final word.
-    rayon::join(
-        || with_words!(&mut join_words, w => gluing.place(true, &join_glue, w)),
-        || with_words!(&mut split_words, w => gluing.place(false, &split_glue, w)),
-    );
-    drop((
-        join_glue.ancestor_lowest_jump,
-        split_glue.ancestor_lowest_jump,
-    ));
     drop((node_vertex, candidate, by_order));
     crate::pages::trim_freed();
     let elapsed = t.elapsed();
     let join = SweepTree {
-        parent: join_glue.parent,
-        children: join_glue.children,
+        parent: join_parent,
+        children: join_children,
         leafward: join_words,
         vertex: Vec::new(),
     };
     let split = SweepTree {
-        parent: split_glue.parent,
-        children: split_glue.children,
+        parent: split_parent,
+        children: split_children,
         leafward: split_words,
-        vertex: split_glue.vertex,
+        vertex: split_vertex,
     };
     Ok(((JoinTree(join), elapsed), (SplitTree(split), elapsed)))
 }
