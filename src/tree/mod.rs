@@ -621,8 +621,8 @@ impl ContourTree {
         // The order is not needed past the grouping: it goes before the
         // tree's node adjacency is made (an order of ids as it is read).
         let grouped = match source {
-            OrderSource::Owned(Order::Ids(ids), _) => merge::group_owned(placed, ids),
-            source => merge::group(placed, source.order()),
+            OrderSource::Owned(Order::Ids(ids), _) => merge::group_owned(placed, ids, values),
+            source => merge::group(placed, source.order(), values),
         };
         let tree = grouped.into_tree();
         times.augment += t.elapsed();
