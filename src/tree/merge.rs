@@ -719,9 +719,18 @@ struct ArcEnds<'a, O: ?Sized> {
 /// grouping of `order` by superarc. With few superarcs (smooth fields) the
 /// order is cut into chunks, each counted ([`count_by_spans`]) and placed
 /// by its own thread (slots of chunk `i` for an arc follow those of chunks
-/// before it); otherwise, since per-chunk counts would outweigh the
-/// vertices, one count, and the order read in slabs by ranges of
-/// superarcs ([`scatter_by_arc_ranges`]) on several threads.
+/// before it): four per thread, or one per thread on 4 threads or more
+/// where the superarcs are fewer than an eighth of the vertices per
+/// thread (counts of half a byte per vertex at most). Otherwise, since
+/// per-chunk counts would outweigh the vertices, one count, and the order
+/// read in slabs by ranges of superarcs ([`scatter_by_arc_ranges`]) on
+/// several threads. That scatter has every thread read every gathered
+/// pair, work that grows with the threads: one chunk per thread took
+/// colin27_ch2better's augmentation from 0.28 to 0.19 s of work on 16
+/// threads, aneurism's from 0.115 to 0.080 (measured oversubscribed on 2
+/// cores, where the time is the work), mni152_t1's from 0.050-0.054 to
+/// 0.043-0.045 s on 4 and 8. On 2 threads one chunk per thread was no
+/// faster (colin27_ch2) or slower (engine), so there it is not used.
 fn group_by_arc<O: VertexOrder + ?Sized>(
     vertex_arc: &[u32],
     ends: &ArcEnds<'_, O>,
@@ -744,6 +753,9 @@ fn group_by_arc_in<O: VertexOrder + ?Sized>(
     let threads = rayon::current_num_threads();
     let chunks = if threads > 1 && arcs * threads * 4 <= n / 16 {
         threads * 4
+    } else if threads >= 4 && arcs * threads <= n / 8 {
+        // Above, at most half a byte per vertex of counts.
+        threads
     } else {
         1
     };
