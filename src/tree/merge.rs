@@ -1135,7 +1135,8 @@ fn count_by_spans<O: VertexOrder + ?Sized>(
                     NONE => size[a as usize] += 1,
                     s => {
                         // Its range: its arc's first, and one more for
-                        // each bound it is at or after (without branches).
+                        // each bound between its arc's ends that it is at
+                        // or after.
                         let [lo, hi] = span[a as usize];
                         let c = bound[lo as usize..hi as usize]
                             .iter()
