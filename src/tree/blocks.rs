@@ -560,9 +560,9 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         // jump spans (not the depths: two reads per node, not three) and
         // finds the candidates by their flag beside their lowest candidate
         // (one thread, 8 blocks: colin27_ch2better's pass 24-26 -> 20-21
-        // ms per direction). The spans lie apart, let go after the pass: beside
-        // the jumps they were 4 bytes more per node when the table is made
-        // from the parents and lowest candidates, the glue's peak.
+        // ms per direction). The spans lie apart, let go after the pass:
+        // beside the jumps they were 4 bytes more per node when the table
+        // is made from the parents and lowest candidates, the glue's peak.
         let mut ancestor_lowest_jump: Vec<[u32; 3]> = link
             .iter()
             .zip(&lowest)

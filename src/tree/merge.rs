@@ -646,12 +646,7 @@ pub fn place(tree: CandidateTree, join_leafward: Leafward, split_leafward: Leafw
 /// the tree's parts, which [`Grouped::into_tree`] assembles without the
 /// order (a build lets it go first).
 pub fn group<O: VertexOrder + ?Sized>(placed: Placed, order: OrderView<'_>, values: &O) -> Grouped {
-    let ends = ArcEnds {
-        values,
-        arcs: &placed.arcs,
-        nodes: &placed.nodes,
-    };
-    let (offsets, arc_vertices) = group_by_arc(&placed.vertex_arc, &ends, order);
+    let (offsets, arc_vertices) = group_by_arc(&placed.vertex_arc, &placed.ends(values), order);
     Grouped {
         placed,
         offsets,
@@ -668,16 +663,15 @@ pub fn group_owned<O: VertexOrder + ?Sized>(
     values: &O,
 ) -> Grouped {
     let (n, arcs) = (order.len(), placed.arcs.len());
-    let ends = ArcEnds {
-        values,
-        arcs: &placed.arcs,
-        nodes: &placed.nodes,
-    };
     let (offsets, arc_vertices) =
         if arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n {
             group_by_arc_consuming(&placed.vertex_arc, arcs, order)
         } else {
-            group_by_arc(&placed.vertex_arc, &ends, OrderView::Ids(&order))
+            group_by_arc(
+                &placed.vertex_arc,
+                &placed.ends(values),
+                OrderView::Ids(&order),
+            )
         };
     Grouped {
         placed,
@@ -702,6 +696,17 @@ impl Grouped {
             vertex_arc,
         } = self.placed;
         ContourTree::assemble(nodes, arcs, vertex_arc, self.offsets, self.arc_vertices)
+    }
+}
+
+impl Placed {
+    /// The superarcs' ends, in the order `values` give.
+    fn ends<'a, O: ?Sized>(&'a self, values: &'a O) -> ArcEnds<'a, O> {
+        ArcEnds {
+            values,
+            arcs: &self.arcs,
+            nodes: &self.nodes,
+        }
     }
 }
 
@@ -1152,11 +1157,11 @@ fn count_by_spans<O: VertexOrder + ?Sized>(
             across.iter_mut().zip(a).for_each(|(x, y)| *x += y);
             (size, across)
         })
-        .unwrap_or_default();
+        .unwrap_or_else(|| (vec![0; arcs], vec![0; straddling as usize * chunks]));
     let mut counts = vec![vec![0u32; arcs]; chunks];
     for (a, (&[lo, hi], &s)) in span.iter().zip(&slot).enumerate() {
         if s == NONE {
-            counts[lo as usize][a] = size.get(a).copied().unwrap_or(0);
+            counts[lo as usize][a] = size[a];
         } else {
             for c in lo..=hi {
                 counts[c as usize][a] = across[s as usize * chunks + c as usize];
