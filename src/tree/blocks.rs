@@ -45,10 +45,11 @@
 //! sequential, one per direction, both directions at once. The sweep looks
 //! up, for a band vertex that is not a candidate, only one of the
 //! components it joins: its upper link (lower, in the split tree) is one
-//! piece in the whole mesh, so all of them are one already. On
-//! colin27_ch2better in 8 blocks (one thread) that took the sweep from
-//! 40-42 to 31-35 ms per direction; the sequential part of the glue is
-//! about 43 ms per direction, where all of it was 73-80.
+//! piece in the whole mesh, so all of them are one already. Such vertices
+//! are three quarters of colin27_ch2better's nodes in 8 blocks; there (one
+//! thread) that took the sweep from 40-42 to 31-35 ms per direction, and
+//! the sequential part of the glue is about 43 ms per direction, where all
+//! of it was 73-80.
 //!
 //! **3. Every other vertex**, in parallel in id order: its block gave it
 //! `x`, the last node of its component in the block when it was swept. In
@@ -515,10 +516,8 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 // Regular in the whole mesh: its upper link (lower, in the
                 // split tree) is one piece of swept vertices, so all it is
                 // joined to is one component already, and one of them names
-                // it. Band vertices are three quarters of colin27_ch2better's
-                // nodes in 8 blocks; looking up only one of each one's
-                // neighbours took its sweep from 39-41 to 30-37 ms per
-                // direction. The vertex is contracted away.
+                // it (the module documentation says what that saves). The
+                // vertex is contracted away.
                 let x = if first_child != NONE {
                     first_child
                 } else {
