@@ -450,10 +450,9 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
         let (mut link_rest, mut sibling_rest) = (&mut link[..], &mut sibling[..]);
         for (b, t) in trees.into_iter().enumerate() {
             let m = t.parent.len();
-            let (l, rest) = std::mem::take(&mut link_rest).split_at_mut(m);
-            link_rest = rest;
-            let (s, rest) = std::mem::take(&mut sibling_rest).split_at_mut(m);
-            sibling_rest = rest;
+            let (l, link_tail) = link_rest.split_at_mut(m);
+            let (s, sibling_tail) = sibling_rest.split_at_mut(m);
+            (link_rest, sibling_rest) = (link_tail, sibling_tail);
             parts.push((self.offset[b], t, l, s));
         }
         parts.into_par_iter().for_each(|(base, t, link, sibling)| {
