@@ -203,12 +203,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match timing {
         Timing::Engine(times) => report!(
             r,
-            "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
+            "time (s):       load {:.3}  sort {:.3}  links {:.3}  join {:.3}  split {:.3} (in parallel{}: {:.3})  merge {:.3}  augment {:.3}  total {:.3} (without load)",
             s(load),
             s(times.sort),
             s(times.links),
             s(times.join),
             s(times.split),
+            match times.blocks {
+                0 | 1 => String::new(),
+                b => format!(", in {b} blocks"),
+            },
             s(times.sweeps),
             s(times.merge),
             s(times.augment),

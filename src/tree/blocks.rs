@@ -101,9 +101,15 @@
 //! 13.6 swept whole (39 and 48 before the glue's tables were cut). The
 //! build sweeps the whole mesh instead wherever the glue would not fit in
 //! the memory left (`GLUE_BYTES_PER_NODE` and `GLUE_BYTES_PER_BAND_VERTEX`
-//! in [`super`]): the same trees, on two cores. `flexiso info` quotes the
-//! same model ([`super::peak_bytes_in_blocks`]) for the blocks this
-//! machine would use.
+//! in [`super`]): the same trees, on two cores. It also sweeps whole on
+//! fewer than [`MANY_CORES`] threads where more than one vertex in
+//! [`NOISY_SHARE`] is a candidate ([`pay`]): there the glue, one core per
+//! direction, costs more than the blocks save (the sweeps of tooth,
+//! engine and white noise about 15 % slower in 2 blocks on 4 cores, set
+//! out from each part's time on one thread), and the peak is twice as
+//! high or more. `flexiso info` quotes the same model
+//! ([`super::peak_bytes_in_blocks`]) for the blocks this machine would
+//! use.
 //!
 //! **Blocks as values.** A block's result is plain data: its node list
 //! (vertex ids, ascending), its two block trees (parent and children per
@@ -157,6 +163,37 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
     let thickest = n / (16 * span.max(1));
     threads.div_ceil(2).min(thickest).max(1)
 }
+
+/// Whether blocks pay on `threads` cores for a mesh of `n` vertices of
+/// which `candidates` are candidate nodes: always on [`MANY_CORES`] or
+/// more, and below that only where at most one vertex in
+/// [`NOISY_SHARE`] is a candidate. The glue sweeps every candidate on one
+/// core per direction, and step 3 climbs further where they are many, so
+/// on a noisy scan few cores do not win back what the glue costs, while
+/// the blocks double the peak memory or more (tooth: 29 bytes per vertex
+/// in 2 blocks, 13.6 whole). A build that cut the mesh for the machine
+/// ([`default_blocks`]) sweeps it whole where they do not pay; cuts asked
+/// for are swept as asked.
+///
+/// Measured one part at a time on one thread (session 37, the README),
+/// and set out for 4 cores in 2 blocks (each direction's wall time: the
+/// block sweeps, sort of the nodes and edges across the cuts over 4
+/// cores, the glue on one, step 3 over 2), against one direction's whole
+/// sweep: tooth (31 % candidates) 45 ms against 38, engine (12 %) 134
+/// against 115, white noise 192³ (52 %) 951 against 830; but colin27_ch2
+/// (7.4 %) 84 against 94 and colin27_ch2better (1.4 %) 216 against
+/// 294-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
+/// against 38, engine 102 against 115, white noise 573 against 830.
+pub fn pay(threads: usize, n: usize, candidates: usize) -> bool {
+    threads >= MANY_CORES || candidates.saturating_mul(NOISY_SHARE) <= n
+}
+
+/// From this many threads on, blocks pay whatever the candidates ([`pay`]).
+pub const MANY_CORES: usize = 6;
+
+/// Below [`MANY_CORES`], blocks pay only where at most one vertex in this
+/// many is a candidate ([`pay`]).
+pub const NOISY_SHARE: usize = 10;
 
 /// The join and split trees of the whole mesh, computed in the blocks
 /// `cuts` defines (`cuts[0] = 0 < cuts[1] < ... = n`) and glued, with the

@@ -186,6 +186,9 @@ pub struct BuildTimes {
     pub merge: Duration,
     /// Grouping regular vertices into superarcs.
     pub augment: Duration,
+    /// The blocks the join and split trees were swept in (1: the whole
+    /// mesh; [`blocks`]).
+    pub blocks: usize,
 }
 
 impl BuildTimes {
@@ -471,7 +474,7 @@ impl ContourTree {
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let blocks = blocks::default_blocks(field.len(), field.mesh().edge_span());
-        Self::from_field_in_blocks(field, blocks, progress)
+        Self::from_field_cut(field, blocks, true, progress)
     }
 
     /// Builds the tree of a grid field with its join and split trees
@@ -480,6 +483,17 @@ impl ContourTree {
     pub fn from_field_in_blocks(
         field: &ScalarField,
         blocks: usize,
+        progress: &Progress,
+    ) -> Result<(Self, BuildTimes), BuildError> {
+        Self::from_field_cut(field, blocks, false, progress)
+    }
+
+    /// [`Self::from_field_in_blocks`]; blocks `chosen` for the machine are
+    /// given up where they do not pay ([`blocks::pay`]).
+    fn from_field_cut(
+        field: &ScalarField,
+        blocks: usize,
+        chosen: bool,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let t = Instant::now();
@@ -491,14 +505,14 @@ impl ContourTree {
         let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
         let source = OrderSource::Owned(order, counting.then_some(&remake));
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, merge::REDUCED_SHARE, progress))?;
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, chosen, merge::REDUCED_SHARE, progress))?;
         times.sort += sort;
         Ok((tree, times))
     }
 
     /// Builds the tree of any mesh given its vertex order: `values` compares
     /// two vertices, `order` lists them ascending. Blocks as
-    /// [`blocks::default_blocks`] says.
+    /// [`blocks::default_blocks`] says, where they pay ([`blocks::pay`]).
     pub fn build<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
         values: &O,
@@ -507,7 +521,16 @@ impl ContourTree {
     ) -> Result<(Self, BuildTimes), BuildError> {
         let n = mesh.num_vertices();
         let cuts = blocks::even_cuts(n, blocks::default_blocks(n, mesh.edge_span()));
-        Self::build_in_blocks(mesh, values, order, &cuts, progress)
+        let order = OrderSource::Borrowed(order);
+        Self::build_from(
+            mesh,
+            values,
+            order,
+            &cuts,
+            true,
+            merge::REDUCED_SHARE,
+            progress,
+        )
     }
 
     /// [`Self::build`] with the join and split trees computed in the blocks
@@ -525,13 +548,16 @@ impl ContourTree {
             values,
             OrderSource::Borrowed(order),
             cuts,
+            false,
             merge::REDUCED_SHARE,
             progress,
         )
     }
 
     /// [`Self::build_in_blocks`] with the order borrowed or owned: an owned
-    /// order that can be made again may be let go during the merge. The
+    /// order that can be made again may be let go during the merge. Cuts
+    /// `chosen` for the machine are given up for one block where blocks
+    /// do not pay ([`blocks::pay`]). The
     /// candidates regular in both trees are reduced before the merge when
     /// at least one vertex in `reduce_share` is one
     /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
@@ -540,6 +566,7 @@ impl ContourTree {
         values: &O,
         mut source: OrderSource<'_>,
         cuts: &[u32],
+        chosen: bool,
         reduce_share: usize,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
@@ -572,11 +599,16 @@ impl ContourTree {
         }
         let whole = [0, n as u32];
         let band = blocks::band_vertices(cuts, n, mesh.edge_span());
-        let cuts = cuts_that_fit(cuts, &whole, candidates, band, available);
+        let cuts = if chosen && !blocks::pay(rayon::current_num_threads(), n, candidates) {
+            &whole
+        } else {
+            cuts_that_fit(cuts, &whole, candidates, band, available)
+        };
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
         progress.check(0, 1)?;
         times.join = tj;
+        times.blocks = cuts.len() - 1;
         times.split = ts;
         times.sweeps = t.elapsed();
         let supernodes = merge::Supernodes::of_trees(&join, &split);
@@ -994,6 +1026,7 @@ mod tests {
                 v.as_slice(),
                 OrderSource::Borrowed(&order),
                 &cuts,
+                false,
                 share,
                 &Progress::new(),
             ))
