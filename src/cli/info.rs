@@ -195,9 +195,10 @@ fn tree_memory(f: &ScalarField) -> (usize, usize, u64) {
     let remade = crate::tree::remakes_order(n, candidates, counting);
     let order_bytes = crate::field::order_bytes(f.values());
     let span = mesh.edge_span();
-    let blocks = match blocks::default_blocks(n, span) {
-        b if blocks::pay(rayon::current_num_threads(), n, candidates) => b,
-        _ => 1,
+    let blocks = if blocks::pay(rayon::current_num_threads(), n, candidates) {
+        blocks::default_blocks(n, span)
+    } else {
+        1
     };
     let band = blocks::band_vertices(&blocks::even_cuts(n, blocks), n, span);
     let available = crate::field::io::available_memory();

@@ -557,9 +557,9 @@ impl ContourTree {
     /// [`Self::build_in_blocks`] with the order borrowed or owned: an owned
     /// order that can be made again may be let go during the merge. Cuts
     /// `chosen` for the machine are given up for one block where blocks
-    /// do not pay ([`blocks::pay`]). The
-    /// candidates regular in both trees are reduced before the merge when
-    /// at least one vertex in `reduce_share` is one
+    /// do not pay ([`blocks::pay`]). The candidates regular in both trees
+    /// are reduced before the merge when at least one vertex in
+    /// `reduce_share` is one
     /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
     fn build_from<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
@@ -608,8 +608,8 @@ impl ContourTree {
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
         progress.check(0, 1)?;
         times.join = tj;
-        times.blocks = cuts.len() - 1;
         times.split = ts;
+        times.blocks = cuts.len() - 1;
         times.sweeps = t.elapsed();
         let supernodes = merge::Supernodes::of_trees(&join, &split);
         if let Some(available) = crate::field::io::available_memory() {
