@@ -33,41 +33,35 @@
 //! those of the whole mesh. One more sweep over this graph, the nodes in
 //! the vertex order (the blocks' sorted node lists merged), gives the join
 //! tree of the whole mesh on the nodes. A band vertex that is not a
-//! candidate has one component above it in the whole mesh (its upper link,
-//! lower in the split tree, is one piece), so all it is joined to is one
-//! component already when it is swept: it joins that component and
-//! changes nothing else. So it never enters the union-find: it keeps a
-//! *stand-in*, a candidate of that component (the stand-in of the first
-//! node it is joined to, or that node if a candidate), and every later
-//! edge to it is read as an edge to its stand-in, which is in the same
-//! component from then on. The union-find, the parents and the jump
-//! pointers below are the candidates' only: their parents, their children
-//! counts, their numbers in the vertex order and the last candidate of
-//! each component come out exactly as the whole sweep makes them.
+//! candidate has one component above it in the whole mesh, so it joins one
+//! component and is contracted away: the candidates' parents, their
+//! children counts, their numbers in the vertex order and the last
+//! candidate of each component come out exactly as the whole sweep makes
+//! them.
 //!
 //! What of the glue runs on every core: each block's tree edges are listed
 //! per node on its own core, and the table step 3 climbs is made on all of
 //! them. The sweep and the pass that makes the jump pointers (below) are
-//! sequential, one per direction, both directions at once; the pointers
-//! are made for the candidates only. Then, on every core, each other node's
-//! stand-in becomes the last candidate of its component when the node was
-//! swept (step 3's climb), so that the vertices of its block that it
-//! stands for climb only past the candidates after it. Band vertices that
-//! are not candidates are three quarters of colin27_ch2better's nodes in 8
-//! blocks; on one thread its sequential part went from 41-46 ms per
-//! direction (the sweep 31-35, the pointers 10-11) to 33-36 (the sweep
-//! 28-32, the pointers about 4), the new pass taking 20-22 ms of work on
-//! every core.
+//! sequential, one per direction, both directions at once. The sweep looks
+//! up, for a band vertex that is not a candidate, only one of the
+//! components it joins: its upper link (lower, in the split tree) is one
+//! piece in the whole mesh, so all of them are one already. Such vertices
+//! are three quarters of colin27_ch2better's nodes in 8 blocks; there (one
+//! thread) that took the sweep from 40-42 to 31-35 ms per direction, and
+//! the sequential part of the glue is about 43 ms per direction, where all
+//! of it was 73-80.
 //!
 //! **3. Every other vertex**, in parallel in id order: its block gave it
-//! `x`, the last node of its component in the block when it was swept
-//! (a band vertex that is not a candidate is its own `x`). Its leafward
-//! candidate is the last candidate of that component swept before it in
-//! the whole mesh: in the glued tree of the candidates, the last ancestor
-//! swept before the vertex of `x` if `x` is a candidate, else of the
-//! stand-in of `x` (swept before `x`, and in its component since). The
-//! search climbs that chain of ancestors, whose first ones (those swept
-//! before the vertex) are what it passes. One step at a time it took no steps on
+//! `x`, the last node of its component in the block when it was swept. In
+//! the glued tree its component at that moment is the subtree of the last
+//! ancestor `y` of `x` still swept before it, and its leafward candidate is
+//! the lowest candidate of that subtree, kept per node by the glue. The
+//! path from `x` to `y` crosses the bands of every block the component
+//! reaches, but only its candidates matter: the band vertices on it are
+//! contracted, so the answer is the lowest candidate below `x` unless a
+//! candidate ancestor is swept before the vertex; the search climbs the
+//! chain of candidate ancestors, whose first ones (those swept before the
+//! vertex) are what it passes. One step at a time it took no steps on
 //! smooth fields but about 11 a vertex and direction on scans (colin27_ch2
 //! and white noise in 2 blocks), whose big components span the blocks:
 //! half the blocked sweeps' time. So each node also keeps a jump pointer
@@ -89,15 +83,13 @@
 //! place of a sorted copy: 8 bytes per such edge less now): per direction
 //! each node's block-tree children, threaded through two arrays (the
 //! block trees are let go once they are), the edges across the cuts (each
-//! block's, in node order), its union-find, each node's parent or
-//! stand-in (in the first child's slot once the node is visited) and
-//! number, the candidates' parents and child counts, and the candidates'
-//! nodes in the order they are swept (4 bytes per candidate); shared, the
-//! nodes' vertices, order and flags. Once the lists and the union-find
-//! are let go, each candidate's parent, number and jump pointer (each
-//! other node's stand-in) lie side by side (12 bytes, and the span of
-//! each jump while the pointers are made, then the new stand-ins): the
-//! peak of the tables above is unchanged. All of
+//! block's, in node order), its union-find, each node's parent (in the
+//! first child's slot once the node is visited) and lowest candidate, and
+//! the candidates' parents and child counts; shared, the nodes' vertices,
+//! order and flags. Once the lists and the union-find are let go, each
+//! node's nearest candidate ancestor, lowest candidate and jump pointer
+//! lie side by side (12 bytes, and the span of each jump while the
+//! pointers are made): the peak of the tables above is unchanged. All of
 //! it is released before the merge, and the free pages of the
 //! allocator's heaps go back to the system ([`crate::pages::trim_freed`]).
 //! Bands cost two planes per cut: 2 (B - 1) X Y nodes for B blocks, about
@@ -113,8 +105,8 @@
 //! fewer than [`MANY_CORES`] threads where more than one vertex in
 //! [`NOISY_SHARE`] is a candidate ([`pay`]): there the glue, one core per
 //! direction, costs more than the blocks save (the sweeps of tooth,
-//! engine and white noise 15-18 % slower in 2 blocks on 4 cores, set out
-//! from each part's time on one thread), and the peak is twice as
+//! engine and white noise about 15 % slower in 2 blocks on 4 cores, set
+//! out from each part's time on one thread), and the peak is twice as
 //! high or more. `flexiso info` quotes the same model
 //! ([`super::peak_bytes_in_blocks`]) for the blocks this machine would
 //! use.
@@ -178,8 +170,8 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// [`NOISY_SHARE`] is a candidate. The glue sweeps every candidate on one
 /// core per direction, and step 3 climbs further where they are many, so
 /// on a noisy scan few cores do not win back what the glue costs, while
-/// the blocks double the peak memory or more (tooth on 4 threads: 21.5
-/// bytes per vertex in 2 blocks, 11.2 whole). A build that cut the mesh for the machine
+/// the blocks double the peak memory or more (tooth: 29 bytes per vertex
+/// in 2 blocks, 13.6 whole). A build that cut the mesh for the machine
 /// ([`default_blocks`]) sweeps it whole where they do not pay; cuts asked
 /// for are swept as asked.
 ///
@@ -189,8 +181,8 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// cores, the glue on one, step 3 over 2), against one direction's whole
 /// sweep: tooth (31 % candidates) 45 ms against 38, engine (12 %) 134
 /// against 115, white noise 192³ (52 %) 951 against 830; but colin27_ch2
-/// (7.4 %) 84 against 84-94 and colin27_ch2better (1.4 %) 216 against
-/// 281-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
+/// (7.4 %) 84 against 94 and colin27_ch2better (1.4 %) 216 against
+/// 294-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
 /// against 38, engine 102 against 115, white noise 573 against 830.
 pub fn pay(threads: usize, n: usize, candidates: usize) -> bool {
     threads >= MANY_CORES || candidates.saturating_mul(NOISY_SHARE) <= n
@@ -436,19 +428,20 @@ struct Glued {
     children: Vec<u8>,
     /// The candidates' vertices, ascending (split direction only).
     vertex: Vec<u32>,
-    /// Per candidate: its parent in the glued tree (the candidate that
-    /// absorbed its component while it was the component's last
-    /// candidate), `NONE` at the root; its number with [`CANDIDATE`] set
-    /// (its word once glued); and a jump pointer up its chain of
+    /// Per node: its nearest candidate ancestor in the glued tree (the
+    /// tree of the nodes: a node's parent absorbed its component while it
+    /// was the component's last node), `NONE` if it has none; the lowest
+    /// candidate of its subtree (join) / highest (split), by number, with
+    /// [`CANDIDATE`] set where the node is itself a candidate (its word
+    /// once glued); and a jump pointer up its chain of candidate
     /// ancestors. Step 3 climbs through the first and third and reads the
-    /// second where it stops. Per other node: its stand-in (a candidate
-    /// of the component it joined, swept before it), 0 (no flag), `NONE`.
+    /// second where it stops.
     ancestor_lowest_jump: Vec<[u32; 3]>,
 }
 
 /// The fields of [`Glued::ancestor_lowest_jump`].
 const ANCESTOR: usize = 0;
-const NUMBER: usize = 1;
+const LOWEST: usize = 1;
 const JUMP: usize = 2;
 
 /// What both glues read.
@@ -478,8 +471,8 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
     /// The sweep over all nodes: block tree edges and the mesh edges that
     /// cross a cut (`crossing[b]`: (node, neighbour swept before it) for
     /// the band of block `b`). The block trees are let go once their edges
-    /// are listed per node, and the lists and the union-find before the
-    /// jump pointers are made.
+    /// are listed per node, and the lists and the union-find before each
+    /// node's nearest candidate ancestor is found.
     fn glue(&self, join: bool, trees: Vec<BlockTree>, crossing: &[Vec<(u32, u32)>]) -> Glued {
         let k = self.node_vertex.len();
         // Per node, the nodes it is joined to and that are swept before it:
@@ -523,17 +516,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
 
         let mut uf = vec![NONE; k];
         let mut lowest = vec![NONE; k];
-        // The candidates' nodes in the order they are swept.
-        let mut swept = Vec::with_capacity(self.candidates);
-        // A node swept already as the union-find knows it: a candidate is
-        // itself, any other node the stand-in it keeps in `link`.
-        let stand_in = |link: &[u32], x: u32| {
-            if self.candidate[x as usize] {
-                x
-            } else {
-                link[x as usize]
-            }
-        };
         let mut parent = vec![NONE; self.candidates];
         let mut children = vec![0u8; self.candidates];
         let mut vertex = Vec::with_capacity(if join { 0 } else { self.candidates });
@@ -565,14 +547,13 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 }
                 &edges[start..*at]
             };
+            uf[g as usize] = ROOT | g;
             if !self.candidate[g as usize] {
                 // Regular in the whole mesh: its upper link (lower, in the
                 // split tree) is one piece of swept vertices, so all it is
-                // joined to is one component already, and any of them names
-                // it (the module documentation says what that saves). It
-                // keeps, in its slot of `link`, a candidate of that
-                // component swept before it, which stands for it from now
-                // on: the union-find holds only the candidates.
+                // joined to is one component already, and one of them names
+                // it (the module documentation says what that saves). The
+                // vertex is contracted away.
                 let x = if first_child != NONE {
                     first_child
                 } else {
@@ -582,31 +563,43 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                     x, NONE,
                     "a band vertex that is not a candidate joins one component"
                 );
-                link[g as usize] = stand_in(&link, x);
+                if x != NONE {
+                    let r = find(&mut uf, x);
+                    let last = uf[r as usize] & !ROOT;
+                    // Visited: its slot of `link` now holds its parent.
+                    link[last as usize] = g;
+                    lowest[g as usize] = lowest[last as usize];
+                    union(&mut uf, g, r, g, link_rank(g) > link_rank(r));
+                }
                 #[cfg(debug_assertions)]
                 {
-                    let root = find(&mut uf, link[g as usize]);
+                    let root = find(&mut uf, g);
                     let mut c = first_child;
                     while c != NONE {
-                        let r = find(&mut uf, stand_in(&link, c));
-                        assert_eq!(r, root, "one component beyond a regular vertex");
+                        assert_eq!(
+                            find(&mut uf, c),
+                            root,
+                            "one component beyond a regular vertex"
+                        );
                         c = sibling[c as usize];
                     }
                     for &(_, w) in across {
-                        let r = find(&mut uf, stand_in(&link, w));
-                        assert_eq!(r, root, "one component beyond a regular vertex");
+                        assert_eq!(
+                            find(&mut uf, w),
+                            root,
+                            "one component beyond a regular vertex"
+                        );
                     }
                 }
                 continue;
             }
-            uf[g as usize] = ROOT | g;
             reps.clear();
             let mut child = first_child;
             while child != NONE {
-                reps.push(stand_in(&link, child));
+                reps.push(child);
                 child = sibling[child as usize];
             }
-            reps.extend(across.iter().map(|&(_, w)| stand_in(&link, w)));
+            reps.extend(across.iter().map(|&(_, w)| w));
             let kid = if join {
                 next -= 1;
                 next
@@ -630,7 +623,6 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             }
             lowest[g as usize] = kid;
             children[kid as usize] = merged;
-            swept.push(g);
             if !join {
                 vertex.push(self.node_vertex[g as usize]);
             }
@@ -644,29 +636,45 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             "every edge across a cut was read at its node"
         );
         drop((sibling, uf));
-        // Per candidate its parent, a candidate, and per other node its
-        // stand-in: step 3 climbs from candidate to candidate. Beside each
-        // candidate's parent a jump pointer up the same chain, made root
-        // first (a parent before its children; Myers' skew-binary
-        // pointers: a node jumps where its parent's jump jumps when the
-        // two jumps span equal numbers of ancestors, else to its parent),
-        // so that the climb takes O(log depth) steps. The pass keeps the
-        // number of ancestors each jump spans (not the depths: two reads
-        // per candidate, not three), visiting the candidates in the reverse
-        // of the order they were swept. The spans lie apart: beside the
-        // jumps they were 4 bytes more per node when the table is made
-        // from the parents and numbers, the glue's peak.
+        // Each node's nearest candidate ancestor, root first (a parent
+        // before its children), written over its parent: step 3 climbs
+        // from candidate to candidate. Beside it a jump pointer up the
+        // same chain (Myers' skew-binary pointers: a node jumps where its
+        // ancestor's jump jumps when the two jumps span equal numbers of
+        // ancestors, else to that ancestor), so that the climb takes
+        // O(log depth) steps. The pass keeps the number of ancestors each
+        // jump spans (not the depths: two reads per node, not three) and
+        // finds the candidates by their flag beside their lowest candidate
+        // (one thread, 8 blocks: colin27_ch2better's pass 24-26 -> 20-21
+        // ms per direction). The spans lie apart, let go after the pass:
+        // beside the jumps they were 4 bytes more per node when the table
+        // is made from the parents and lowest candidates, the glue's peak.
         let mut ancestor_lowest_jump: Vec<[u32; 3]> = link
             .par_iter()
             .zip(&lowest)
             .zip(self.candidate)
-            .map(|((&p, &l), &c)| [p, if c { CANDIDATE | l } else { 0 }, NONE])
+            .map(|((&p, &l), &c)| [p, if c { CANDIDATE | l } else { l }, NONE])
             .collect();
         drop((link, lowest));
         let mut span = vec![0u32; k];
-        for &g in swept.iter().rev() {
+        let root_first: Box<dyn Iterator<Item = &u32>> = if join {
+            Box::new(self.by_order.iter())
+        } else {
+            Box::new(self.by_order.iter().rev())
+        };
+        for &g in root_first {
             let g = g as usize;
-            let a = ancestor_lowest_jump[g][ANCESTOR];
+            let p = ancestor_lowest_jump[g][ANCESTOR];
+            if p == NONE {
+                continue;
+            }
+            let parent = ancestor_lowest_jump[p as usize];
+            let a = if parent[LOWEST] & CANDIDATE != 0 {
+                p
+            } else {
+                parent[ANCESTOR]
+            };
+            ancestor_lowest_jump[g][ANCESTOR] = a;
             if a == NONE {
                 continue;
             }
@@ -684,48 +692,11 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
             ancestor_lowest_jump[g][JUMP] = jump;
             span[g] = spans;
         }
-        drop(swept);
-        // Each other node's stand-in made the last candidate of its
-        // component when the node was swept, on every core (step 3's
-        // climb, in the spans' place): the vertices of its block that it
-        // stands for then climb only past the candidates after it.
-        let table = &ancestor_lowest_jump;
-        span.par_iter_mut().enumerate().for_each(|(g, last)| {
-            *last = if self.candidate[g] {
-                NONE
-            } else {
-                self.last_before(join, table, table[g][ANCESTOR], self.node_vertex[g])
-            };
-        });
-        ancestor_lowest_jump
-            .par_iter_mut()
-            .zip(span)
-            .for_each(|(e, last)| {
-                if last != NONE {
-                    e[ANCESTOR] = last;
-                }
-            });
         Glued {
             parent,
             children,
             vertex,
             ancestor_lowest_jump,
-        }
-    }
-
-    /// The last candidate swept before vertex `v` on the chain of
-    /// ancestors of the candidate `x` (inclusive), swept before `v`, in the
-    /// glued tree `table` ([`Glued::ancestor_lowest_jump`]). The ancestors
-    /// swept before `v` are a prefix of the chain: a jump to one of them
-    /// skips only such.
-    fn last_before(&self, join: bool, table: &[[u32; 3]], mut x: u32, v: u32) -> u32 {
-        let before = |g: u32| self.before(join, self.node_vertex[g as usize], v);
-        loop {
-            let [c, _, j] = table[x as usize];
-            if c == NONE || !before(c) {
-                return x;
-            }
-            x = if j != c && before(j) { j } else { c };
         }
     }
 
@@ -743,28 +714,32 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                     let first = block.lo + (c * CHUNK) as u32;
                     for (i, word) in chunk.iter_mut().enumerate() {
                         let w = word.get();
-                        // x: the vertex's node (a band vertex or a
-                        // candidate), else the last node of its component
-                        // in its block when it was swept.
-                        let x = base + (w & !CANDIDATE);
-                        let [stand_in, number, _] = glued.ancestor_lowest_jump[x as usize];
-                        if w & CANDIDATE != 0 && number & CANDIDATE != 0 {
-                            // A candidate: its own number, flagged.
-                            *word = W::of(number);
+                        if w & CANDIDATE != 0 {
+                            // A node: a candidate's own number, flagged,
+                            // or the lowest candidate a band vertex joined.
+                            let g = (base + (w & !CANDIDATE)) as usize;
+                            *word = W::of(glued.ancestor_lowest_jump[g][LOWEST]);
                             continue;
                         }
-                        // Its leafward candidate is the last candidate of
-                        // the component of x swept before v: the last
-                        // ancestor swept before v of x, if a candidate, or
-                        // of its stand-in (swept before it, in its
-                        // component since). The ancestors swept before v
-                        // are a prefix of the chain: a jump to one of
-                        // them skips only such.
                         let v = first + i as u32;
-                        let table = &glued.ancestor_lowest_jump;
-                        let x = if number & CANDIDATE != 0 { x } else { stand_in };
-                        let y = self.last_before(join, table, x, v);
-                        *word = W::of(table[y as usize][NUMBER] & !CANDIDATE);
+                        // The last ancestor y of x swept before v: no candidate
+                        // lies between x and y unless the nearest candidate
+                        // ancestor of x is swept before v too, and then the
+                        // search goes on from there. Below x, up to a
+                        // candidate, every node is a contracted band vertex
+                        // of one child, so y's lowest candidate is x's.
+                        // The ancestors swept before v are a prefix of the
+                        // chain: a jump to one of them skips only such.
+                        let mut x = base + w;
+                        let before = |g: u32| self.before(join, self.node_vertex[g as usize], v);
+                        let lowest = loop {
+                            let [c, lowest, j] = glued.ancestor_lowest_jump[x as usize];
+                            if c == NONE || !before(c) {
+                                break lowest & !CANDIDATE;
+                            }
+                            x = if j != c && before(j) { j } else { c };
+                        };
+                        *word = W::of(lowest);
                     }
                 });
         }
