@@ -105,8 +105,8 @@
 //! fewer than [`MANY_CORES`] threads where more than one vertex in
 //! [`NOISY_SHARE`] is a candidate ([`pay`]): there the glue, one core per
 //! direction, costs more than the blocks save (the sweeps of tooth,
-//! engine and white noise about 15 % slower in 2 blocks on 4 cores, set
-//! out from each part's time on one thread), and the peak is twice as
+//! engine and white noise 15-18 % slower in 2 blocks on 4 cores, set out
+//! from each part's time on one thread), and the peak is twice as
 //! high or more. `flexiso info` quotes the same model
 //! ([`super::peak_bytes_in_blocks`]) for the blocks this machine would
 //! use.
@@ -170,8 +170,8 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// [`NOISY_SHARE`] is a candidate. The glue sweeps every candidate on one
 /// core per direction, and step 3 climbs further where they are many, so
 /// on a noisy scan few cores do not win back what the glue costs, while
-/// the blocks double the peak memory or more (tooth: 29 bytes per vertex
-/// in 2 blocks, 13.6 whole). A build that cut the mesh for the machine
+/// the blocks double the peak memory or more (tooth on 4 threads: 21.5
+/// bytes per vertex in 2 blocks, 11.2 whole). A build that cut the mesh for the machine
 /// ([`default_blocks`]) sweeps it whole where they do not pay; cuts asked
 /// for are swept as asked.
 ///
@@ -181,8 +181,8 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// cores, the glue on one, step 3 over 2), against one direction's whole
 /// sweep: tooth (31 % candidates) 45 ms against 38, engine (12 %) 134
 /// against 115, white noise 192³ (52 %) 951 against 830; but colin27_ch2
-/// (7.4 %) 84 against 94 and colin27_ch2better (1.4 %) 216 against
-/// 294-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
+/// (7.4 %) 84 against 84-94 and colin27_ch2better (1.4 %) 216 against
+/// 281-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
 /// against 38, engine 102 against 115, white noise 573 against 830.
 pub fn pay(threads: usize, n: usize, candidates: usize) -> bool {
     threads >= MANY_CORES || candidates.saturating_mul(NOISY_SHARE) <= n
