@@ -171,19 +171,20 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// core per direction, and step 3 climbs further where they are many, so
 /// on a noisy scan few cores do not win back what the glue costs, while
 /// the blocks double the peak memory or more (tooth on 4 threads: 21.5
-/// bytes per vertex in 2 blocks, 11.2 whole). A build that cut the mesh for the machine
-/// ([`default_blocks`]) sweeps it whole where they do not pay; cuts asked
-/// for are swept as asked.
+/// bytes per vertex in 2 blocks, 11.2 whole). A build that cut the mesh
+/// for the machine ([`default_blocks`]) sweeps it whole where they do not
+/// pay; cuts asked for are swept as asked.
 ///
 /// Measured one part at a time on one thread (session 37, the README),
 /// and set out for 4 cores in 2 blocks (each direction's wall time: the
 /// block sweeps, sort of the nodes and edges across the cuts over 4
-/// cores, the glue on one, step 3 over 2), against one direction's whole
-/// sweep: tooth (31 % candidates) 45 ms against 38, engine (12 %) 134
-/// against 115, white noise 192³ (52 %) 951 against 830; but colin27_ch2
-/// (7.4 %) 84 against 84-94 and colin27_ch2better (1.4 %) 216 against
-/// 281-340. On 8 cores in 4 blocks the noisy ones gain too: tooth 34
-/// against 38, engine 102 against 115, white noise 573 against 830.
+/// cores, the glue on one, step 3 over 2), against one direction's
+/// whole sweep (the two run side by side): tooth (31 % candidates) 45
+/// ms against 38, engine (12 %) 134 against 115, white noise 192³ (52 %)
+/// 951 against 830; but colin27_ch2 (7.4 %) 84 against 94 and
+/// colin27_ch2better (1.4 %) 216 against 281-340. On 8 cores in 4 blocks
+/// the noisy ones gain too: tooth 34 against 38, engine 102 against 115,
+/// white noise 573 against 830.
 pub fn pay(threads: usize, n: usize, candidates: usize) -> bool {
     threads >= MANY_CORES || candidates.saturating_mul(NOISY_SHARE) <= n
 }
