@@ -29,7 +29,7 @@ fn threads_give_one_row_per_count_and_the_scaling_curve() {
     let run = bench_built_in(&["--smooth", "24", "--synthetic", "20", "--threads", "3,1,3"]);
     assert!(run.success(), "{}", run.stderr);
     let header = run.stdout.lines().next().unwrap();
-    assert!(header.ends_with("threads   CPU s"), "{header}");
+    assert!(header.ends_with("threads   CPU s blocks"), "{header}");
     let rows = rows(&run.stdout);
     let names: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
     assert_eq!(
@@ -41,8 +41,11 @@ fn threads_give_one_row_per_count_and_the_scaling_curve() {
             "synthetic-noisy-20"
         ]
     );
-    let threads: Vec<&str> = rows.iter().map(|r| r[r.len() - 2].as_str()).collect();
+    let threads: Vec<&str> = rows.iter().map(|r| r[r.len() - 3].as_str()).collect();
     assert_eq!(threads, ["1", "3", "1", "3"]);
+    // Grids this small are never cut (each block at least 16 bands thick).
+    let blocks: Vec<&str> = rows.iter().map(|r| r[r.len() - 1].as_str()).collect();
+    assert_eq!(blocks, ["1", "1", "1", "1"]);
     // The same tree on every count.
     assert_eq!(rows[0][2], rows[1][2], "superarcs");
     assert_eq!(rows[2][2], rows[3][2], "superarcs");

@@ -17,7 +17,9 @@
 //! `--threads 1,2,4,...` runs every dataset once per thread count, each in
 //! a pool of that many threads (the engine picks its blocks for the pool,
 //! as it would on a machine with that many cores), adds the CPU time of
-//! the process (all threads) to each row, and ends each dataset with its
+//! the process (all threads) and the blocks the sweeps ran in (the
+//! engine gives blocks up on a few cores where they do not pay:
+//! [`crate::tree::blocks::pay`]) to each row, and ends each dataset with its
 //! scaling curve: the speed-up of the total, and of each stage, over the
 //! first thread count. That is the curve issue 13 asks for on 16 cores,
 //! in one command.
@@ -367,7 +369,7 @@ pub fn header(threads: bool) -> String {
         "level ms"
     );
     if threads {
-        format!("{head} {:>7} {:>7}", "threads", "CPU s")
+        format!("{head} {:>7} {:>7} {:>6}", "threads", "CPU s", "blocks")
     } else {
         head
     }
@@ -398,7 +400,12 @@ pub fn format_row(r: &Row, threads: bool) -> String {
         r.level_change.as_secs_f64() * 1e3,
     );
     if threads {
-        format!("{row} {:>7} {:>7.2}", r.threads, r.cpu.as_secs_f64())
+        format!(
+            "{row} {:>7} {:>7.2} {:>6}",
+            r.threads,
+            r.cpu.as_secs_f64(),
+            r.times.blocks
+        )
     } else {
         row
     }
