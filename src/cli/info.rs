@@ -195,11 +195,7 @@ fn tree_memory(f: &ScalarField) -> (usize, usize, u64) {
     let remade = crate::tree::remakes_order(n, candidates, counting);
     let order_bytes = crate::field::order_bytes(f.values());
     let span = mesh.edge_span();
-    let blocks = if blocks::pay(rayon::current_num_threads(), n, candidates) {
-        blocks::default_blocks(n, span)
-    } else {
-        1
-    };
+    let blocks = blocks::chosen_blocks(n, span, candidates);
     let band = blocks::band_vertices(&blocks::even_cuts(n, blocks), n, span);
     let available = crate::field::io::available_memory();
     let (peak, in_blocks) =

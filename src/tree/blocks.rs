@@ -171,9 +171,9 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// core per direction, and step 3 climbs further where they are many, so
 /// on a noisy scan few cores do not win back what the glue costs, while
 /// the blocks double the peak memory or more (tooth on 4 threads: 21.5
-/// bytes per vertex in 2 blocks, 11.2 whole). A build that cut the mesh
-/// for the machine ([`default_blocks`]) sweeps it whole where they do not
-/// pay; cuts asked for are swept as asked.
+/// bytes per vertex in 2 blocks, 11.2 whole). A build that cuts the mesh
+/// for the machine sweeps it whole where they do not pay
+/// ([`chosen_blocks`]); cuts asked for are swept as asked.
 ///
 /// Measured one part at a time on one thread (session 37, the README),
 /// and set out for 4 cores in 2 blocks (each direction's wall time: the
@@ -187,6 +187,17 @@ pub fn default_blocks(n: usize, span: usize) -> usize {
 /// white noise 573 against 830.
 pub fn pay(threads: usize, n: usize, candidates: usize) -> bool {
     threads >= MANY_CORES || candidates.saturating_mul(NOISY_SHARE) <= n
+}
+
+/// The blocks a build cuts a mesh of `n` vertices, `candidates` of them
+/// candidate nodes, into on this machine: [`default_blocks`] where they
+/// [`pay`], else 1 (the whole mesh).
+pub fn chosen_blocks(n: usize, span: usize, candidates: usize) -> usize {
+    if pay(rayon::current_num_threads(), n, candidates) {
+        default_blocks(n, span)
+    } else {
+        1
+    }
 }
 
 /// From this many threads on, blocks pay whatever the candidates ([`pay`]).

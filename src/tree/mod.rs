@@ -473,8 +473,7 @@ impl ContourTree {
         field: &ScalarField,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
-        let blocks = blocks::default_blocks(field.len(), field.mesh().edge_span());
-        Self::from_field_cut(field, blocks, true, progress)
+        Self::from_field_cut(field, None, progress)
     }
 
     /// Builds the tree of a grid field with its join and split trees
@@ -485,15 +484,14 @@ impl ContourTree {
         blocks: usize,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
-        Self::from_field_cut(field, blocks, false, progress)
+        Self::from_field_cut(field, Some(blocks), progress)
     }
 
-    /// [`Self::from_field_in_blocks`]; blocks `chosen` for the machine are
-    /// given up where they do not pay ([`blocks::pay`]).
+    /// [`Self::from_field_in_blocks`] in `count` blocks, or with none given,
+    /// in the blocks chosen for the machine ([`blocks::chosen_blocks`]).
     fn from_field_cut(
         field: &ScalarField,
-        blocks: usize,
-        chosen: bool,
+        count: Option<usize>,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let t = Instant::now();
@@ -501,36 +499,26 @@ impl ContourTree {
         let order = field.compact_vertex_order();
         let sort = t.elapsed();
         let mesh = field.mesh();
-        let cuts = blocks::even_cuts(field.len(), blocks);
+        let cuts = count.map(|b| blocks::even_cuts(field.len(), b));
         let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
         let source = OrderSource::Owned(order, counting.then_some(&remake));
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, &cuts, chosen, merge::REDUCED_SHARE, progress))?;
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, cuts.as_deref(), merge::REDUCED_SHARE, progress))?;
         times.sort += sort;
         Ok((tree, times))
     }
 
     /// Builds the tree of any mesh given its vertex order: `values` compares
     /// two vertices, `order` lists them ascending. Blocks as
-    /// [`blocks::default_blocks`] says, where they pay ([`blocks::pay`]).
+    /// [`blocks::chosen_blocks`] says.
     pub fn build<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
         values: &O,
         order: &[u32],
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
-        let n = mesh.num_vertices();
-        let cuts = blocks::even_cuts(n, blocks::default_blocks(n, mesh.edge_span()));
         let order = OrderSource::Borrowed(order);
-        Self::build_from(
-            mesh,
-            values,
-            order,
-            &cuts,
-            true,
-            merge::REDUCED_SHARE,
-            progress,
-        )
+        Self::build_from(mesh, values, order, None, merge::REDUCED_SHARE, progress)
     }
 
     /// [`Self::build`] with the join and split trees computed in the blocks
@@ -547,17 +535,17 @@ impl ContourTree {
             mesh,
             values,
             OrderSource::Borrowed(order),
-            cuts,
-            false,
+            Some(cuts),
             merge::REDUCED_SHARE,
             progress,
         )
     }
 
     /// [`Self::build_in_blocks`] with the order borrowed or owned: an owned
-    /// order that can be made again may be let go during the merge. Cuts
-    /// `chosen` for the machine are given up for one block where blocks
-    /// do not pay ([`blocks::pay`]). The candidates regular in both trees
+    /// order that can be made again may be let go during the merge. With
+    /// no `cuts` given, the blocks are chosen for the machine once the
+    /// candidates are counted ([`blocks::chosen_blocks`]). The candidates
+    /// regular in both trees
     /// are reduced before the merge when at least one vertex in
     /// `reduce_share` is one
     /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
@@ -565,8 +553,7 @@ impl ContourTree {
         mesh: &M,
         values: &O,
         mut source: OrderSource<'_>,
-        cuts: &[u32],
-        chosen: bool,
+        cuts: Option<&[u32]>,
         reduce_share: usize,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
@@ -598,12 +585,17 @@ impl ContourTree {
             check_memory(n, candidates, order_bytes, remake.is_some(), available)?;
         }
         let whole = [0, n as u32];
-        let band = blocks::band_vertices(cuts, n, mesh.edge_span());
-        let cuts = if chosen && !blocks::pay(rayon::current_num_threads(), n, candidates) {
-            &whole
-        } else {
-            cuts_that_fit(cuts, &whole, candidates, band, available)
+        let span = mesh.edge_span();
+        let chosen;
+        let cuts = match cuts {
+            Some(cuts) => cuts,
+            None => {
+                chosen = blocks::even_cuts(n, blocks::chosen_blocks(n, span, candidates));
+                &chosen
+            }
         };
+        let band = blocks::band_vertices(cuts, n, span);
+        let cuts = cuts_that_fit(cuts, &whole, candidates, band, available);
         let ((mut join, tj), (mut split, ts)) =
             blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
         progress.check(0, 1)?;
@@ -1025,8 +1017,7 @@ mod tests {
                 &mesh,
                 v.as_slice(),
                 OrderSource::Borrowed(&order),
-                &cuts,
-                false,
+                Some(&cuts),
                 share,
                 &Progress::new(),
             ))
