@@ -1,8 +1,8 @@
 //! The sweeps' per-vertex words (each vertex's link code until the sweep
 //! visits it, then its leafward candidate or its own candidate number:
 //! [`super::sweep::CANDIDATE`]) held in 3 bytes per vertex instead of 4
-//! from the link pass to the placement, when there are fewer than 2^23
-//! candidates (every scan but the noisiest of a billion vertices).
+//! from the link pass to the finished tree, when there are fewer than
+//! 2^23 candidates (every scan but the noisiest of a billion vertices).
 //!
 //! Both sweeps run at once and each holds one word per vertex beside the
 //! vertex order, so the two records are the largest thing the engine holds
@@ -10,12 +10,13 @@
 //! instead of 8 (a smooth float field sweeps in 10 bytes per vertex with
 //! its 4-byte order, not 12). The sweeps read and write the entries in
 //! place ([`Word`] for `[u8; 3]`: a candidate flag in bit 23 instead of
-//! bit 31, the same 32-bit word to the sweep); only the placement unpacks
-//! the first record, writing `vertex_arc` over it in its own allocation
-//! while the second is given back as it is read ([`combine`]), so no
-//! record is ever held twice: three words become four, groups of entries
-//! at a time on every core, each wave of groups writing only words that
-//! no group of the same wave still has to read.
+//! bit 31, the same 32-bit word to the sweep). The placement writes each
+//! vertex's place (its superarc, or its supernode with the flag) over its
+//! entry of the first record, in place and in the same 3 bytes, and gives
+//! the second back ([`combine`]): a tree has fewer supernodes and
+//! superarcs than candidates, so the places pack wherever the records
+//! did, and the finished tree keeps them so (`ContourTree::place` reads
+//! them): 3 bytes per vertex, not 4.
 //!
 //! The link pass counts the candidates while it writes the codes, so a
 //! record starts packed and is widened in place ([`Leafward::widen`]) if
@@ -113,6 +114,24 @@ macro_rules! with_words {
 }
 pub(crate) use with_words;
 
+/// [`with_words!`] for a shared record: `$w` bound to its entries as a
+/// slice of its [`Word`]s.
+macro_rules! with_entries {
+    ($record:expr, $w:ident => $body:expr) => {
+        match $record {
+            $crate::tree::leafward::Leafward::Words(words) => {
+                let $w: &[u32] = words.as_slice();
+                $body
+            }
+            $crate::tree::leafward::Leafward::Packed { words, len } => {
+                let $w: &[[u8; 3]] = $crate::tree::leafward::entries(words, *len);
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_entries;
+
 /// [`with_words!`] for two records made alike (both packed or both not):
 /// `$a` and `$b` bound to their entries, of one [`Word`] type.
 macro_rules! with_both_words {
@@ -151,7 +170,7 @@ pub fn entries_mut(words: &mut [u32], len: usize) -> &mut [[u8; 3]] {
 }
 
 /// [`entries_mut`], shared.
-fn entries(words: &[u32], len: usize) -> &[[u8; 3]] {
+pub fn entries(words: &[u32], len: usize) -> &[[u8; 3]] {
     assert!(3 * len <= 4 * words.len());
     // SAFETY: as in `entries_mut`, borrowed shared.
     unsafe { std::slice::from_raw_parts(words.as_ptr() as *const [u8; 3], len) }
@@ -201,7 +220,21 @@ impl Leafward {
     pub fn get(&self, i: usize) -> u32 {
         match self {
             Leafward::Words(words) => words[i],
-            Leafward::Packed { words, len } => entries(words, *len)[i].get(),
+            Leafward::Packed { words, len } => {
+                debug_assert!(i < *len, "vertex {i} of {len}");
+                // One bounds check, on the bytes (the words hold the
+                // entries and at most 3 bytes of padding beyond them).
+                let bytes: &[u8] = bytemuck::cast_slice(words);
+                let entry: [u8; 3] = bytes[3 * i..3 * i + 3].try_into().expect("3 bytes");
+                entry.get()
+            }
+        }
+    }
+
+    /// Heap bytes held by the record.
+    pub fn heap_bytes(&self) -> usize {
+        match self {
+            Leafward::Words(words) | Leafward::Packed { words, .. } => 4 * words.capacity(),
         }
     }
 
@@ -220,61 +253,45 @@ impl Leafward {
     pub fn into_words(self) -> Vec<u32> {
         match self {
             Leafward::Words(words) => words,
-            Leafward::Packed { words, len } => unpack_in_place(words, len, None, |j, _| j),
+            Leafward::Packed { words, len } => unpack_in_place(words, len),
         }
     }
 }
 
-/// One word per vertex, `f(join word, split word)`, from the two sweeps'
-/// records: written in place over `join` (unpacked from the top down, as
-/// [`Leafward::into_words`] does: [`unpack_in_place`]) while `split` is given back from the top
-/// down as it is read. Packed, the two hold 6 bytes per vertex at most
-/// throughout (3 + 1 for the part unpacked, 3 for the part of `split` not
-/// yet read), where unpacking first and reading after held 7.
-pub fn combine(join: Leafward, split: Leafward, f: impl Fn(u32, u32) -> u32 + Sync) -> Vec<u32> {
-    match (join, split) {
-        (Leafward::Packed { words, len }, Leafward::Packed { words: second, .. }) => {
-            unpack_in_place(words, len, Some(second), f)
-        }
-        (Leafward::Words(mut words), Leafward::Words(second)) => {
-            words
-                .par_chunks_mut(1 << 14)
-                .zip(second.par_chunks(1 << 14))
-                .for_each(|(j, s)| j.iter_mut().zip(s).for_each(|(j, &s)| *j = f(*j, s)));
-            words
-        }
-        _ => unreachable!("both records are made alike"),
-    }
-}
-
-/// Group `g` of a packed record, if there is one.
-fn group_of(record: &Option<Vec<u32>>, g: usize) -> Option<&[u32]> {
-    record.as_ref().map(|r| &r[3 * g..3 * g + 3])
-}
-
-/// The packed record `words` of `len` entries unpacked in place, each
-/// entry `j` written as `f(j, s)` with `s` the same vertex's entry of the
-/// packed record `second` (0 without one). Group g reads words 3g.. and
-/// writes 4g..: the last, partial group first, then waves from the top of
-/// at most [`WAVE_GROUPS`] groups, each writing above everything it reads;
-/// after each wave the groups of `second` it read are given back. The
-/// words beyond the packed ones are not written before their wave
-/// (zeroing them first would hold the whole fourth word from the start),
-/// so the record is seen as possibly uninitialised words until the end.
-fn unpack_in_place(
-    mut words: Vec<u32>,
-    len: usize,
-    mut second: Option<Vec<u32>>,
+/// Each vertex's `f(join word, split word)` from the two sweeps' records,
+/// written in place over `join`'s entry, in its packing: packed, `f` must
+/// give words that pack (below 2^23 but for the [`CANDIDATE`] flag), as
+/// the placement's do, since a tree has fewer supernodes and superarcs
+/// than candidates. The two records hold 6 bytes per vertex throughout
+/// (packed), and `join` 3 once `split` is given back: the tree's places
+/// stay in 3 bytes per vertex.
+pub fn combine(
+    mut join: Leafward,
+    mut split: Leafward,
     f: impl Fn(u32, u32) -> u32 + Sync,
-) -> Vec<u32> {
-    let group = |j: &[u32], s: Option<&[u32]>| -> [u32; 4] {
-        let j = unpack4([j[0], j[1], j[2]]);
-        let s = s.map_or([0; 4], |s| unpack4([s[0], s[1], s[2]]));
-        std::array::from_fn(|k| f(j[k], s[k]))
-    };
+) -> Leafward {
+    with_both_words!(&mut join, &mut split, (j, s) => j
+        .par_chunks_mut(1 << 14)
+        .zip(s.par_chunks(1 << 14))
+        .for_each(|(j, s)| j.iter_mut().zip(s).for_each(|(j, s)| *j = Word::of(f(j.get(), s.get())))));
+    drop(split);
+    if let Leafward::Packed { words, .. } = &mut join {
+        // The room to unpack into is not needed any more.
+        words.shrink_to_fit();
+    }
+    join
+}
+
+/// The packed record `words` of `len` entries unpacked in place. Group g
+/// reads words 3g.. and writes 4g..: the last, partial group first, then
+/// waves from the top of at most [`WAVE_GROUPS`] groups, each writing above
+/// everything it reads. The words beyond the packed ones are not written
+/// before their wave (zeroing them first would hold the whole fourth word
+/// from the start), so the record is seen as possibly uninitialised words
+/// until the end.
+fn unpack_in_place(mut words: Vec<u32>, len: usize) -> Vec<u32> {
     let whole = len / 4;
-    let last = (whole < len.div_ceil(4))
-        .then(|| group(&words[3 * whole..3 * whole + 3], group_of(&second, whole)));
+    let last = (whole < len.div_ceil(4)).then(|| unpack4([0, 1, 2].map(|k| words[3 * whole + k])));
     words.reserve_exact(len.saturating_sub(words.len()));
     // SAFETY: the allocation holds `len` words (reserved just above);
     // `MaybeUninit` words may hold anything, and the first `3 *
@@ -285,7 +302,7 @@ fn unpack_in_place(
     // <= 4s of a group g < e, which are packed words no wave has written
     // yet, all initialised.
     let packed = |w: &[MaybeUninit<u32>]| unsafe {
-        [w[0].assume_init(), w[1].assume_init(), w[2].assume_init()]
+        unpack4([w[0].assume_init(), w[1].assume_init(), w[2].assume_init()])
     };
     let mut e = whole;
     while e > SERIAL_GROUPS {
@@ -294,32 +311,20 @@ fn unpack_in_place(
             .max(e.saturating_sub(WAVE_GROUPS))
             .max(SERIAL_GROUPS);
         let (low, high) = all.split_at_mut(4 * s);
-        let out = high[..4 * (e - s)].par_chunks_mut(4 << 10);
-        let write = |(out, j): (&mut [MaybeUninit<u32>], &[MaybeUninit<u32>]),
-                     t: Option<&[u32]>| {
-            let groups = out.chunks_exact_mut(4).zip(j.chunks_exact(3)).enumerate();
-            for (i, (o, j)) in groups {
-                let four = group(&packed(j), t.map(|t| &t[3 * i..3 * i + 3]));
-                o.iter_mut().zip(four).for_each(|(o, x)| _ = o.write(x));
-            }
-        };
-        let low = low[3 * s..3 * e].par_chunks(3 << 10);
-        match &second {
-            Some(second) => out
-                .zip(low)
-                .zip(second[3 * s..3 * e].par_chunks(3 << 10))
-                .for_each(|(oj, t)| write(oj, Some(t))),
-            None => out.zip(low).for_each(|oj| write(oj, None)),
-        }
-        // The second record's groups from s up are read: their pages go.
-        if let Some(second) = &mut second {
-            second.truncate(3 * s);
-            crate::pages::release_spare(second);
-        }
+        high[..4 * (e - s)]
+            .par_chunks_mut(4 << 10)
+            .zip(low[3 * s..3 * e].par_chunks(3 << 10))
+            .for_each(|(out, j)| {
+                for (o, j) in out.chunks_exact_mut(4).zip(j.chunks_exact(3)) {
+                    o.iter_mut()
+                        .zip(packed(j))
+                        .for_each(|(o, x)| _ = o.write(x));
+                }
+            });
         e = s;
     }
     for g in (0..e).rev() {
-        let four = group(&packed(&all[3 * g..3 * g + 3]), group_of(&second, g));
+        let four = packed(&all[3 * g..3 * g + 3]);
         all[4 * g..4 * g + 4]
             .iter_mut()
             .zip(four)
@@ -420,7 +425,8 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(30))]
         /// Combining two records in place gives each vertex `f` of its
-        /// two words, packed or not.
+        /// two words, in the first record's packing; packed, the room to
+        /// unpack into is given back.
         #[test]
         fn two_records_combine_vertex_by_vertex(
             n in 0usize..120_000,
@@ -429,10 +435,14 @@ mod tests {
         ) {
             let candidates = if wide { 1u32 << 23 } else { (1 << 23) - 1 };
             let (a, b) = (record(n, candidates, seed), record(n, candidates, !seed));
-            let f = |x: u32, y: u32| x.rotate_left(7) ^ y.wrapping_mul(3);
+            // A word that packs where the records do, as places are.
+            let f = |x: u32, y: u32| (x & CANDIDATE) | ((x ^ y.wrapping_mul(3)) % candidates);
             let combined = combine(pack(&a, candidates as usize), pack(&b, candidates as usize), f);
+            prop_assert_eq!(combined.is_packed(), !wide);
+            let room = if wide { 4 * n } else { 12 * n.div_ceil(4) };
+            prop_assert!(combined.heap_bytes() <= room);
             let expect: Vec<u32> = a.iter().zip(&b).map(|(&x, &y)| f(x, y)).collect();
-            prop_assert_eq!(combined, expect);
+            prop_assert_eq!(combined.into_words(), expect);
         }
     }
 

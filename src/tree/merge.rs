@@ -116,7 +116,7 @@
 //! and given back slab by slab, so that it and the arcs' vertex lists
 //! hold 4 bytes per vertex together, not 8 ([`group_owned`]).
 
-use super::leafward::{self, Leafward, Word, with_words};
+use super::leafward::{self, Leafward, Word, with_entries, with_words};
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
 use crate::field::{OrderView, VertexOrder};
@@ -592,7 +592,9 @@ pub(super) fn climb(pointer: &mut [u32], start: u32, go_on: impl Fn(u32, u32) ->
 pub struct Placed {
     nodes: Vec<Node>,
     arcs: Vec<Superarc>,
-    vertex_arc: Vec<u32>,
+    /// Each vertex's superarc, or `NODE_FLAG | node`: the first record,
+    /// packed where it was.
+    vertex_arc: Leafward,
 }
 
 /// Places every vertex (see the module documentation). `join_leafward`
@@ -646,7 +648,7 @@ pub fn place(tree: CandidateTree, join_leafward: Leafward, split_leafward: Leafw
 /// the tree's parts, which [`Grouped::into_tree`] assembles without the
 /// order (a build lets it go first).
 pub fn group<O: VertexOrder + ?Sized>(placed: Placed, order: OrderView<'_>, values: &O) -> Grouped {
-    let (offsets, arc_vertices) = group_by_arc(&placed.vertex_arc, &placed.ends(values), order);
+    let (offsets, arc_vertices) = with_entries!(&placed.vertex_arc, vertex_arc => group_by_arc(vertex_arc, &placed.ends(values), order));
     Grouped {
         placed,
         offsets,
@@ -663,16 +665,12 @@ pub fn group_owned<O: VertexOrder + ?Sized>(
     values: &O,
 ) -> Grouped {
     let (n, arcs) = (order.len(), placed.arcs.len());
-    let (offsets, arc_vertices) =
-        if arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n {
-            group_by_arc_consuming(&placed.vertex_arc, arcs, order)
-        } else {
-            group_by_arc(
-                &placed.vertex_arc,
-                &placed.ends(values),
-                OrderView::Ids(&order),
-            )
-        };
+    let consuming = arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n;
+    let (offsets, arc_vertices) = with_entries!(&placed.vertex_arc, vertex_arc => if consuming {
+        group_by_arc_consuming(vertex_arc, arcs, order)
+    } else {
+        group_by_arc(vertex_arc, &placed.ends(values), OrderView::Ids(&order))
+    });
     Grouped {
         placed,
         offsets,
@@ -695,7 +693,7 @@ impl Grouped {
             arcs,
             vertex_arc,
         } = self.placed;
-        ContourTree::assemble(nodes, arcs, vertex_arc, self.offsets, self.arc_vertices)
+        ContourTree::assemble_places(nodes, arcs, vertex_arc, self.offsets, self.arc_vertices)
     }
 }
 
@@ -736,8 +734,8 @@ struct ArcEnds<'a, O: ?Sized> {
 /// cores, where the time is the work), mni152_t1's from 0.050-0.054 to
 /// 0.043-0.045 s on 4 and 8. On 2 threads one chunk per thread was no
 /// faster (colin27_ch2) or slower (engine), so there it is not used.
-fn group_by_arc<O: VertexOrder + ?Sized>(
-    vertex_arc: &[u32],
+fn group_by_arc<W: Word, O: VertexOrder + ?Sized>(
+    vertex_arc: &[W],
     ends: &ArcEnds<'_, O>,
     order: OrderView<'_>,
 ) -> (Vec<u32>, Vec<u32>) {
@@ -748,8 +746,8 @@ fn group_by_arc<O: VertexOrder + ?Sized>(
 
 /// [`group_by_arc`], reading the order in slabs of `slab` positions where
 /// it goes by ranges of superarcs.
-fn group_by_arc_in<O: VertexOrder + ?Sized>(
-    vertex_arc: &[u32],
+fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized>(
+    vertex_arc: &[W],
     ends: &ArcEnds<'_, O>,
     order: OrderView<'_>,
     slab: usize,
@@ -821,9 +819,9 @@ fn group_by_arc_in<O: VertexOrder + ?Sized>(
 /// # Safety
 /// Superarc `a`'s slots, from `next[a]` on as many as it has vertices, lie
 /// in `dst` and are no other's.
-unsafe fn scatter_by_arc_ranges(
+unsafe fn scatter_by_arc_ranges<W: Word>(
     order: OrderView<'_>,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     offsets: &[u32],
     mut next: Vec<u32>,
     slab: usize,
@@ -864,7 +862,7 @@ unsafe fn scatter_by_arc_ranges(
                         if let Some(&w) = ids.get(i + ORDER_AHEAD) {
                             prefetch(vertex_arc, w as usize);
                         }
-                        out[k] = (vertex_arc[v as usize] as u64) << 32 | v as u64;
+                        out[k] = (vertex_arc[v as usize].get() as u64) << 32 | v as u64;
                         k += 1;
                     }
                 });
@@ -933,7 +931,7 @@ const CONSUMING_CHUNKS: usize = 2;
 /// above the build's peak); the ranges cost 7-15 ms more on colin27_ch2
 /// on 2 threads (0.25 s to the tree), and one count shared by atomic
 /// increments was 10 ms slower.
-fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
+fn arc_sizes<W: Word>(vertex_arc: &[W], arcs: usize) -> Vec<u32> {
     let threads = rayon::current_num_threads();
     if arcs.saturating_mul(threads).saturating_mul(2) > vertex_arc.len() {
         let mut count = vec![0u32; arcs];
@@ -944,7 +942,7 @@ fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
             .for_each(|(t, range)| {
                 let first = (t * per) as u32;
                 let len = range.len() as u32;
-                for &a in vertex_arc {
+                for a in vertex_arc.iter().map(|a| a.get()) {
                     // A node's word (NODE_FLAG) wraps far beyond every range.
                     let i = a.wrapping_sub(first);
                     if i < len {
@@ -959,7 +957,7 @@ fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
         .par_chunks(per)
         .map(|part| {
             let mut count = vec![0u32; arcs];
-            for &a in part.iter().filter(|&&a| a & NODE_FLAG == 0) {
+            for a in part.iter().map(|a| a.get()).filter(|&a| a & NODE_FLAG == 0) {
                 count[a as usize] += 1;
             }
             count
@@ -978,8 +976,8 @@ fn arc_sizes(vertex_arc: &[u32], arcs: usize) -> Vec<u32> {
 /// float field, whose order is 4 bytes per vertex and not remade, that
 /// was the build's peak. Each arc's slots fill from its end down, slab by
 /// slab and, within a slab, chunk by chunk from the last: the same layout.
-fn group_by_arc_consuming(
-    vertex_arc: &[u32],
+fn group_by_arc_consuming<W: Word>(
+    vertex_arc: &[W],
     arcs: usize,
     order: Vec<u32>,
 ) -> (Vec<u32>, Vec<u32>) {
@@ -995,8 +993,8 @@ fn group_by_arc_consuming(
 
 /// [`group_by_arc_consuming`], each slab's superarcs written beside its
 /// ids where `packed` gives the ids' bits.
-fn group_by_arc_in_slabs(
-    vertex_arc: &[u32],
+fn group_by_arc_in_slabs<W: Word>(
+    vertex_arc: &[W],
     arcs: usize,
     mut order: Vec<u32>,
     packed: Option<u32>,
@@ -1053,9 +1051,9 @@ fn group_by_arc_in_slabs(
 
 /// Per range of positions of the order: how many of its regular vertices
 /// lie on each of the `arcs` superarcs, a range per task.
-fn count_in_ranges(
+fn count_in_ranges<W: Word>(
     order: OrderView<'_>,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     arcs: usize,
     ranges: &[std::ops::Range<usize>],
 ) -> Vec<Vec<u32>> {
@@ -1083,9 +1081,9 @@ fn count_in_ranges(
 /// superarcs, 8 ranges, 1,551 of them straddling) on 2 threads 46-47 ms
 /// before, 29-31 now (the ranges of the nodes and ends 6-8 ms, the pass
 /// 18-21, the counts laid out 4).
-fn count_by_spans<O: VertexOrder + ?Sized>(
+fn count_by_spans<W: Word, O: VertexOrder + ?Sized>(
     order: OrderView<'_>,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     ranges: &[std::ops::Range<usize>],
     ends: &ArcEnds<'_, O>,
 ) -> Vec<Vec<u32>> {
@@ -1132,7 +1130,7 @@ fn count_by_spans<O: VertexOrder + ?Sized>(
         .map(|(i, part)| {
             let mut size = vec![0u32; arcs];
             let mut across = vec![0u32; straddling as usize * chunks];
-            for (v, &a) in (i as u32 * per as u32..).zip(part) {
+            for (v, a) in (i as u32 * per as u32..).zip(part.iter().map(|a| a.get())) {
                 if a & NODE_FLAG != 0 {
                     continue;
                 }
@@ -1180,10 +1178,10 @@ fn count_by_spans<O: VertexOrder + ?Sized>(
 /// it rewrites: each id `v` becomes `v | arc << id_bits`, with `arcs` in
 /// place of the superarc of a node (every superarc below `arcs` and every
 /// id below `1 << id_bits`).
-fn count_and_pack(
+fn count_and_pack<W: Word>(
     slab: &mut [u32],
     per: usize,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     arcs: usize,
     id_bits: u32,
 ) -> Vec<Vec<u32>> {
@@ -1195,7 +1193,7 @@ fn count_and_pack(
                     prefetch(vertex_arc, w as usize);
                 }
                 let v = ids[i];
-                let va = vertex_arc[v as usize];
+                let va = vertex_arc[v as usize].get();
                 let a = if va & NODE_FLAG == 0 {
                     count[va as usize] += 1;
                     va
@@ -1243,9 +1241,9 @@ unsafe fn scatter_packed(
 /// # Safety
 /// The slots each (range, arc) writes, from its start on as many as the
 /// range has vertices on the arc, lie in `dst` and are no other's.
-unsafe fn scatter_ranges(
+unsafe fn scatter_ranges<W: Word>(
     order: OrderView<'_>,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     ranges: Vec<std::ops::Range<usize>>,
     starts: Vec<Vec<u32>>,
     dst: &crate::pages::DisjointSlots<'_, u32>,
@@ -1266,9 +1264,9 @@ unsafe fn scatter_ranges(
 /// Calls `f(v, arc)` for each regular vertex `v` at the positions `range`
 /// of the order, with its superarc; the superarcs are read ahead (the
 /// reads are scattered over the volume).
-fn for_each_arc(
+fn for_each_arc<W: Word>(
     order: OrderView<'_>,
-    vertex_arc: &[u32],
+    vertex_arc: &[W],
     range: std::ops::Range<usize>,
     mut f: impl FnMut(u32, u32),
 ) {
@@ -1277,7 +1275,7 @@ fn for_each_arc(
             if let Some(&w) = ids.get(i + ORDER_AHEAD) {
                 prefetch(vertex_arc, w as usize);
             }
-            let va = vertex_arc[v as usize];
+            let va = vertex_arc[v as usize].get();
             if va & NODE_FLAG == 0 {
                 f(v, va);
             }

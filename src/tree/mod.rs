@@ -22,12 +22,13 @@
 //! visits it: the union-find lives on the candidates); merge and
 //! placement the order and the two leafward records, the first of which
 //! becomes `vertex_arc`; the grouping the order, `vertex_arc` and the
-//! arcs' vertex lists (an order of ids given back as it is read, so 8 in
+//! arcs' vertex lists (an order of ids given back as it is read, so 7 in
 //! all). The records are held in 3 bytes per vertex each from the link
-//! pass to the placement when there are fewer than 2^23 candidates
-//! ([`leafward`]): 6 bytes per vertex through the sweeps, the merge and
-//! the placement, which writes `vertex_arc` over the first record as it
-//! gives the second back (8 otherwise).
+//! pass on when there are fewer than 2^23 candidates ([`leafward`]): 6
+//! bytes per vertex through the sweeps, the merge and the placement,
+//! which writes each vertex's place over its entry of the first record,
+//! in the same 3 bytes, and gives the second back (8 otherwise, and 8 at
+//! the grouping).
 //! Candidates add 16 bytes each during the sweeps and about 44 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
@@ -53,8 +54,11 @@
 //! build that would not fit as soon as the candidates are counted, with
 //! half of them taken for supernodes, and [`check_merge_memory`] again
 //! with their real number once the sweeps are done. The
-//! finished tree keeps 8 bytes (`vertex_arc` and `arc_vertices`) plus
-//! O(supernodes).
+//! finished tree keeps 7 bytes per vertex (`vertex_arc` in 3 and
+//! `arc_vertices` in 4; 8 where the records did not pack) plus 32 per
+//! supernode. Keeping the places in 3 bytes (session 38) took the peaks
+//! of `flexiso bench` from 9.6 to 8.6 bytes per vertex on colin27_ch2,
+//! from 10.4 to 10.0 on `synthetic:256`.
 
 pub mod blocks;
 pub mod json;
@@ -68,7 +72,7 @@ mod vertex_merge;
 use crate::field::{Order, OrderView, ScalarField, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
-use leafward::Leafward;
+use leafward::{Leafward, Word};
 use merge::NODE_FLAG;
 use std::time::{Duration, Instant};
 
@@ -158,8 +162,10 @@ pub enum VertexPlace {
 pub struct ContourTree {
     nodes: Vec<Node>,
     arcs: Vec<Superarc>,
-    /// Per vertex: its superarc, or `NODE_FLAG | node`.
-    vertex_arc: Vec<u32>,
+    /// Per vertex: its superarc, or `NODE_FLAG | node`; in 3 bytes per
+    /// vertex where the sweeps' records were ([`leafward`]: the first of
+    /// them, written over by the placement).
+    vertex_arc: Leafward,
     /// Regular vertices of arc `a`: `arc_vertices[arc_offsets[a]..arc_offsets[a+1]]`,
     /// ascending in the vertex order.
     arc_offsets: Vec<u32>,
@@ -244,11 +250,11 @@ impl From<Cancelled> for BuildError {
 /// sweeping; then the order unless it is let go (`order_remade`, see
 /// [`remakes_order`]) and, at the merge, the records and the candidates'
 /// tables ([`merge_table_bytes`]); at the grouping the order (made again if
-/// it was let go), `vertex_arc` and the arcs' vertex lists, 8 per vertex.
-/// The records take 8 bytes per vertex, or 6 with fewer than 2^23
-/// candidates ([`leafward`]: 3 bytes each from the link pass to the
-/// placement, which writes `vertex_arc` over the first as it gives the
-/// second back).
+/// it was let go), `vertex_arc` and the arcs' vertex lists
+/// ([`tree_bytes`]). The records take 8 bytes per vertex, or 6 with fewer
+/// than 2^23 candidates ([`leafward`]: 3 bytes each from the link pass
+/// on; the placement writes `vertex_arc` over the first in its 3 bytes
+/// and gives the second back).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
     peak_bytes_of(n, candidates, candidates / 2, order_bytes, order_remade)
 }
@@ -291,13 +297,19 @@ fn peak_bytes_of(
     let sweeps = order_bytes + records + SWEEP_BYTES_PER_CANDIDATE * candidates as u64;
     let merge = records + merge_table_bytes(n, candidates, supernodes);
     let held = if order_remade { 0 } else { order_bytes };
-    let grouping = order_bytes + 8 * n as u64;
+    let grouping = order_bytes + tree_bytes(candidates) * n as u64;
     sweeps.max(merge + held).max(grouping)
 }
 
 /// The two records' bytes per vertex: 6 packed, else 8 ([`leafward`]).
 fn records_bytes(candidates: usize) -> u64 {
     if leafward::packs(candidates) { 6 } else { 8 }
+}
+
+/// The finished tree's bytes per vertex: its place (the first record's
+/// entry, 3 bytes packed, else 4) and the arcs' vertex lists (4).
+fn tree_bytes(candidates: usize) -> u64 {
+    records_bytes(candidates) / 2 + 4
 }
 
 /// What the candidates' tables hold at the merge's peak: 44 bytes per
@@ -375,15 +387,16 @@ fn cuts_that_fit<'a>(
 
 /// True when a build lets the vertex order go during the merge and sorts
 /// again after it: the order is a counting sort (`counting`: 8- and
-/// 16-bit values, O(n)) and the merge or the placement, without the
-/// order, would still be above the grouping's 8 bytes per vertex beside
-/// it ([`peak_bytes`]). With packed records ([`leafward`]) that takes more
-/// than 1/22 of the vertices as candidates (the merge: 6 bytes per vertex
-/// and 44 per candidate), else 1/64 (the merge, 8 bytes per vertex and 44
-/// per candidate, is then the peak by at least 2/3 of a byte per vertex,
-/// worth a counting sort).
+/// 16-bit values, O(n)) and the merge, without the order, would still be
+/// above the grouping ([`peak_bytes`]), so that some of the order's cost
+/// comes off the peak. With packed records ([`leafward`]) that takes more
+/// than 1/44 of the vertices as candidates (the merge: 6 bytes per vertex
+/// and 44 per candidate, above the grouping's 7 from 1/44 on; 1/22 while
+/// the grouping held 8, before session 38), else 1/64 (the merge, 8 bytes
+/// per vertex and 44 per candidate, is then the peak by at least 2/3 of a
+/// byte per vertex, worth a counting sort).
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    let per = if leafward::packs(candidates) { 22 } else { 64 };
+    let per = if leafward::packs(candidates) { 44 } else { 64 };
     counting && candidates as u64 * per > n as u64
 }
 
@@ -420,7 +433,7 @@ pub fn check_merge_memory(
     let records = records_bytes(candidates) * n as u64;
     let kept = if order_remade { 0 } else { order_bytes };
     let merge = records + merge_table_bytes(n, candidates, supernodes) + kept;
-    let needed = merge.max(order_bytes + 8 * n as u64);
+    let needed = merge.max(order_bytes + tree_bytes(candidates) * n as u64);
     let held = order_bytes + records + 14 * candidates as u64;
     refuse_beyond(n, candidates, needed, available.saturating_add(held))
 }
@@ -656,7 +669,19 @@ impl ContourTree {
     pub(crate) fn assemble(
         nodes: Vec<Node>,
         arcs: Vec<Superarc>,
-        mut vertex_arc: Vec<u32>,
+        vertex_arc: Vec<u32>,
+        arc_offsets: Vec<u32>,
+        arc_vertices: Vec<u32>,
+    ) -> Self {
+        let vertex_arc = Leafward::Words(vertex_arc);
+        Self::assemble_places(nodes, arcs, vertex_arc, arc_offsets, arc_vertices)
+    }
+
+    /// [`Self::assemble`] with the places as the placement leaves them.
+    pub(crate) fn assemble_places(
+        nodes: Vec<Node>,
+        arcs: Vec<Superarc>,
+        mut vertex_arc: Leafward,
         arc_offsets: Vec<u32>,
         arc_vertices: Vec<u32>,
     ) -> Self {
@@ -680,11 +705,12 @@ impl ContourTree {
             offsets[new + 1] = verts.len() as u32;
         }
         drop(arc_vertices);
-        for va in vertex_arc.iter_mut() {
-            if *va & NODE_FLAG == 0 {
-                *va = new_id[*va as usize];
+        leafward::with_words!(&mut vertex_arc, places => for va in places.iter_mut() {
+            let place = Word::get(*va);
+            if place & NODE_FLAG == 0 {
+                *va = Word::of(new_id[place as usize]);
             }
-        }
+        });
         Self::with_adjacency(nodes, sorted_arcs, vertex_arc, offsets, verts)
     }
 
@@ -692,7 +718,7 @@ impl ContourTree {
     fn with_adjacency(
         nodes: Vec<Node>,
         sorted_arcs: Vec<Superarc>,
-        vertex_arc: Vec<u32>,
+        vertex_arc: Leafward,
         offsets: Vec<u32>,
         verts: Vec<u32>,
     ) -> Self {
@@ -774,7 +800,7 @@ impl ContourTree {
     /// Where vertex `v` lies: on a superarc or at a supernode.
     #[inline]
     pub fn place(&self, v: u32) -> VertexPlace {
-        let va = self.vertex_arc[v as usize];
+        let va = self.vertex_arc.get(v as usize);
         if va & NODE_FLAG != 0 {
             VertexPlace::Node(NodeId(va & !NODE_FLAG))
         } else {
@@ -834,8 +860,8 @@ impl ContourTree {
     pub fn heap_bytes(&self) -> usize {
         self.nodes.capacity() * size_of::<Node>()
             + self.arcs.capacity() * size_of::<Superarc>()
-            + (self.vertex_arc.capacity()
-                + self.arc_offsets.capacity()
+            + self.vertex_arc.heap_bytes()
+            + (self.arc_offsets.capacity()
                 + self.arc_vertices.capacity()
                 + self.node_offsets.capacity()
                 + self.node_arcs.capacity())
@@ -943,23 +969,23 @@ mod tests {
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
-        // candidates), below 1/22 of the vertices the grouping or the
+        // candidates), below 1/44 of the vertices the grouping or the
         // sweeps stay the peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(!remakes_order(n, n / 25, true));
-        assert!(remakes_order(n, n / 20, true));
+        assert!(!remakes_order(n, n / 50, true));
+        assert!(remakes_order(n, n / 40, true));
         let huge = 1usize << 30;
         assert!(remakes_order(huge, huge / 60, true), "unpacked: 1/64");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 20, n / 16, n / 4, n / 2] {
+            for k in [n / 40, n / 20, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
-            for k in [0, n / 64, n / 25] {
+            for k in [0, n / 64, n / 50] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
             }

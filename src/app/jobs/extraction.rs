@@ -736,6 +736,16 @@ mod tests {
         mesh.expect("the request answered")
     }
 
+    /// Jobs that keep a dragged contour of up to [`KEPT_TRIANGLES`]
+    /// triangles whatever this machine's cores: on 8 or more,
+    /// [`kept_limit`] keeps none of the test cube's contours, which the
+    /// parallel sweep extracts faster there.
+    fn keeping_jobs() -> Extractions {
+        let mut jobs = Extractions::new(None);
+        jobs.kept_triangles = Some(KEPT_TRIANGLES);
+        jobs
+    }
+
     /// The contour of `arc` at `h` extracted afresh, with nothing kept.
     fn afresh(field: &ScalarField, tree: &ContourTree, arc: ArcId, h: f64) -> ContourMesh {
         let mut scratch = FollowerScratch::default();
@@ -752,7 +762,7 @@ mod tests {
     #[test]
     fn a_dragged_contour_is_kept_and_gives_the_mesh_extracted_afresh() {
         let (field, tree, arc, lo, hi) = cube_and_its_longest_arc();
-        let mut jobs = Extractions::new(None);
+        let mut jobs = keeping_jobs();
         let id = ContourId(7);
         let steps = 6u64;
         for k in 0..steps {
@@ -886,7 +896,7 @@ mod tests {
         for _ in 0..5 {
             // Removed right after its mesh arrived (the keeping job has
             // just started, or has finished).
-            let mut jobs = Extractions::new(None);
+            let mut jobs = keeping_jobs();
             jobs.request(id, 1, &field, &tree, arc, h);
             first_mesh(&mut jobs, 1);
             jobs.forget(id);
@@ -897,7 +907,7 @@ mod tests {
             // Asked for again at once: whatever is kept is the contour
             // at the newer request's isovalue.
             let h2 = lo + 0.55 * (hi - lo);
-            let mut jobs = Extractions::new(None);
+            let mut jobs = keeping_jobs();
             jobs.request(id, 1, &field, &tree, arc, h);
             first_mesh(&mut jobs, 1);
             jobs.request(id, 2, &field, &tree, arc, h2);
