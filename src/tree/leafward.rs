@@ -276,10 +276,9 @@ pub fn combine(
         .for_each(|(j, s)| j.iter_mut().zip(s).for_each(|(j, s)| *j = Word::of(f(j.get(), s.get())))));
     // Its pages go back even where it was carved from the heap (under the
     // program's 1 MiB `M_MMAP_THRESHOLD`), whose freed pages stay resident.
-    if let Leafward::Words(words) | Leafward::Packed { words, .. } = &mut split {
-        words.clear();
-        crate::pages::release_spare(words);
-    }
+    let (Leafward::Words(words) | Leafward::Packed { words, .. }) = &mut split;
+    words.clear();
+    crate::pages::release_spare(words);
     drop(split);
     if let Leafward::Packed { words, .. } = &mut join {
         // The room to unpack into is not needed any more.
