@@ -54,11 +54,13 @@
 //! build that would not fit as soon as the candidates are counted, with
 //! half of them taken for supernodes, and [`check_merge_memory`] again
 //! with their real number once the sweeps are done. The
-//! finished tree keeps 7 bytes per vertex (`vertex_arc` in 3 and
-//! `arc_vertices` in 4; 8 where the records did not pack) plus 32 per
-//! supernode. Keeping the places in 3 bytes (session 38) took the peaks
-//! of `flexiso bench` from 9.6 to 8.6 bytes per vertex on colin27_ch2,
-//! from 10.4 to 10.0 on `synthetic:256`.
+//! finished tree keeps 7 bytes per vertex (`vertex_arc` in 3, and
+//! `arc_vertices` 4 per regular vertex; 8 where the records did not pack)
+//! plus 28 per supernode: 11.15 on tooth. Keeping the places in 3 bytes
+//! (session 38) took the peaks of `flexiso bench` about a byte per vertex
+//! lower on every scan whose peak was the placement or the grouping
+//! (colin27_ch2 9.7-9.8 → 8.5-8.8, colin27_ch2better 8.8-8.9 → 7.5),
+//! 10.4 → 10.0 on `synthetic:256` (its sweeps now).
 
 pub mod blocks;
 pub mod json;
