@@ -911,7 +911,7 @@ const READ_AHEAD: usize = 16;
 /// How far ahead in the vertex order the grouping's passes prefetch each
 /// vertex's superarc. The reads are scattered over the volume, but where
 /// the order runs through consecutive ids (ties, broken by id) they are a
-/// stream of 4-byte words, and 16 of them are one line: 64 took the
+/// stream of 4-byte words (16 to a line; 21 of the 3-byte places): 64 took the
 /// augmentation of `synthetic:256` from 0.18-0.20 to 0.15 s and of
 /// colin27_ch2better from 0.42-0.47 to 0.38-0.40 s (one thread).
 const ORDER_AHEAD: usize = 64;
@@ -1368,6 +1368,16 @@ mod tests {
             let whole = group_by_arc(&vertex_arc, &ends, OrderView::Ids(&order));
             let consumed = group_by_arc_consuming(&vertex_arc, arcs, order.clone());
             prop_assert_eq!(&whole, &consumed);
+            // From the places packed in 3 bytes each, as a tree keeps them.
+            let mut places = Leafward::zeroed(n, true);
+            with_words!(&mut places, w => w.iter_mut().zip(&vertex_arc).for_each(|(w, &x)| *w = Word::of(x)));
+            prop_assert!(places.is_packed());
+            let from_packed = with_entries!(&places, p => (
+                group_by_arc(p, &ends, OrderView::Ids(&order)),
+                group_by_arc_consuming(p, arcs, order.clone()),
+            ));
+            prop_assert_eq!(&whole, &from_packed.0);
+            prop_assert_eq!(&whole, &from_packed.1);
             // Read back from the order itself, not written beside the ids.
             let unpacked = group_by_arc_in_slabs(&vertex_arc, arcs, order.clone(), None);
             prop_assert_eq!(&whole, &unpacked);
