@@ -165,8 +165,8 @@ pub struct ContourTree {
     nodes: Vec<Node>,
     arcs: Vec<Superarc>,
     /// Per vertex: its superarc, or `NODE_FLAG | node`; in 3 bytes per
-    /// vertex where the sweeps' records were ([`leafward`]: the first of
-    /// them, written over by the placement).
+    /// vertex where the sweeps' records were packed ([`leafward`]: it is
+    /// the first of them, written over by the placement).
     vertex_arc: Leafward,
     /// Regular vertices of arc `a`: `arc_vertices[arc_offsets[a]..arc_offsets[a+1]]`,
     /// ascending in the vertex order.
