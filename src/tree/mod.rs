@@ -396,8 +396,8 @@ fn cuts_that_fit<'a>(
 /// and 44 per candidate, above the grouping's 7 from 1/44 on; 1/22 while
 /// the grouping held 8, before session 38), else 1/64 (the merge, 8 bytes
 /// per vertex and 44 per candidate, is then the peak by at least 2/3 of a
-/// byte per vertex, worth a counting sort).
-/// Volumes of fewer than [`REMAKE_MIN_VERTICES`] keep their order.
+/// byte per vertex, worth a counting sort). Volumes of fewer than
+/// [`REMAKE_MIN_VERTICES`] keep their order.
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
     let per = if leafward::packs(candidates) { 44 } else { 64 };
     counting && n >= REMAKE_MIN_VERTICES && candidates as u64 * per > n as u64
@@ -569,9 +569,8 @@ impl ContourTree {
     /// order that can be made again may be let go during the merge. With
     /// no `cuts` given, the blocks are chosen for the machine once the
     /// candidates are counted ([`blocks::chosen_blocks`]). The candidates
-    /// regular in both trees
-    /// are reduced before the merge when at least one vertex in
-    /// `reduce_share` is one
+    /// regular in both trees are reduced before the merge when at least
+    /// one vertex in `reduce_share` is one
     /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
     fn build_from<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
