@@ -129,25 +129,135 @@ pub(super) const NODE_FLAG: u32 = 1 << 31;
 /// The contour tree on the candidates, as the merge leaves it: what placing
 /// the other vertices needs.
 pub struct CandidateTree {
-    nodes: Vec<Node>,
+    /// Per supernode: its vertex (the supernodes themselves, with their
+    /// degrees, are made once the placement is done: [`place`]).
+    node_vertex: Vec<u32>,
     arcs: Vec<Superarc>,
     /// Which candidates are supernodes, and their numbers.
     supernodes: Supernodes,
+    /// The candidates' tables, in 3 bytes per number or 4.
+    tables: Tables,
+}
+
+/// The candidates' tables the placement reads, in 3 bytes per number
+/// where the candidates are fewer than [`Id3::NONE`], else 4.
+pub(super) enum Tables {
+    Words(Chains<u32>),
+    Packed(Chains<Id3>),
+}
+
+/// What the placement reads of each candidate.
+pub(super) struct Chains<I> {
     /// Per candidate `a`: A(a) (`NONE` at the root).
-    a_of: Vec<u32>,
+    a_of: Vec<I>,
     /// Per candidate `b`: B(b) (`NONE` if it has none).
-    b_of: Vec<u32>,
+    b_of: Vec<I>,
     /// Per candidate: its subtree's pre-order range and the superarc of
     /// the edge above it (`NONE` at the root).
-    subtree: Vec<[u32; 3]>,
+    subtree: Vec<[I; 3]>,
+}
+
+/// A candidate's number (or a pre-order position, or a superarc) as the
+/// merge's tables hold it: a word, or 3 bytes where the candidates are
+/// fewer than [`Id3::NONE`] (as the sweeps' records are packed:
+/// [`leafward`]). `NONE` is kept as `NONE`.
+pub(super) trait Id: Copy + Send + Sync + std::fmt::Debug {
+    /// The number, or `NONE`.
+    fn get(self) -> u32;
+    /// Stores `x` (below [`Id3::NONE`], or `NONE`, if packed).
+    fn of(x: u32) -> Self;
+    /// The tables the placement reads, in this width.
+    fn tables(chains: Chains<Self>) -> Tables;
+    /// A spare allocation of words to hold these: itself for words, none
+    /// for 3 bytes (an allocation is not reused for another type).
+    fn spare(words: Vec<u32>) -> Vec<Self>;
+}
+
+impl Id for u32 {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        self
+    }
+
+    #[inline(always)]
+    fn of(x: u32) -> Self {
+        x
+    }
+
+    fn tables(chains: Chains<Self>) -> Tables {
+        Tables::Words(chains)
+    }
+
+    fn spare(words: Vec<u32>) -> Vec<Self> {
+        words
+    }
+}
+
+/// A number in 3 bytes, little end first; all ones stands for `NONE`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(transparent)]
+pub(super) struct Id3([u8; 3]);
+
+impl Id3 {
+    /// The 3-byte pattern of `NONE`: numbers below it fit.
+    pub(super) const NONE: u32 = (1 << 24) - 1;
+}
+
+impl Id for Id3 {
+    #[inline(always)]
+    fn get(self) -> u32 {
+        let e = u32::from_le_bytes([self.0[0], self.0[1], self.0[2], 0]);
+        // All ones (only `NONE`'s pattern carries into bit 24) widened to
+        // `NONE`, without a branch.
+        e | ((e + 1) >> 24).wrapping_neg()
+    }
+
+    #[inline(always)]
+    fn of(x: u32) -> Self {
+        debug_assert!(x < Self::NONE || x == NONE);
+        let b = x.to_le_bytes();
+        Id3([b[0], b[1], b[2]])
+    }
+
+    fn tables(chains: Chains<Self>) -> Tables {
+        Tables::Packed(chains)
+    }
+
+    fn spare(_: Vec<u32>) -> Vec<Self> {
+        Vec::new()
+    }
+}
+
+/// True where a merge on `candidates` candidates holds its tables in 3
+/// bytes per number ([`Id3`]): every pre-order position and superarc
+/// number is at most the candidates' count.
+pub(super) fn packs_tables(candidates: usize) -> bool {
+    candidates < Id3::NONE as usize
 }
 
 /// Merges the join and split trees (see the module documentation).
 /// `candidate_vertex` lists the candidates' vertices, ascending, and
 /// `supernode` which of them are supernodes ([`Supernodes::of_trees`]).
 /// Arrays are dropped as soon as they are used up: on white noise about
-/// half the vertices are candidates.
+/// half the vertices are candidates. The candidates' tables are held in 3
+/// bytes per number where `packed` and they fit ([`packs_tables`]).
 pub fn merge(
+    join: JoinTree,
+    split: SplitTree,
+    candidate_vertex: Vec<u32>,
+    supernode: Supernodes,
+    packed: bool,
+    progress: &Progress,
+) -> Result<CandidateTree, Cancelled> {
+    if packed && packs_tables(candidate_vertex.len()) {
+        merge_in::<Id3>(join, split, candidate_vertex, supernode, progress)
+    } else {
+        merge_in::<u32>(join, split, candidate_vertex, supernode, progress)
+    }
+}
+
+/// [`merge`] with the tables' numbers held as `I`.
+fn merge_in<I: Id>(
     join: JoinTree,
     split: SplitTree,
     candidate_vertex: Vec<u32>,
@@ -159,15 +269,14 @@ pub fn merge(
     let (mut st_parent, mut st_down) = (split.0.parent, split.0.children);
     debug_assert_eq!(jt_parent.len(), k);
 
-    // Supernodes, in vertex order (counted first: on a noisy scan about
-    // half the candidates, so no vector grown by doubling).
+    // The supernodes' vertices, in vertex order (counted first: on a noisy
+    // scan about half the candidates, so no vector grown by doubling).
+    // Their degrees are counted from the superarcs once the vertices are
+    // placed ([`place`]): 4 bytes per supernode through the merge and the
+    // placement, not a [`Node`]'s 8.
     debug_assert_eq!(supernode.bits.len(), k.div_ceil(64));
-    let nodes = supernode.gather(|c| Node {
-        vertex: candidate_vertex[c],
-        up: jt_up[c].into(),
-        down: st_down[c].into(),
-    });
-    let supernodes = nodes.len();
+    let node_vertex = supernode.gather(|c| candidate_vertex[c]);
+    let supernodes = node_vertex.len();
 
     // Fig. 9 on the candidates; the global minimum (candidate 0) is last.
     // `cut` holds the candidates cut so far, in the order they were cut,
@@ -175,7 +284,7 @@ pub fn merge(
     // back: each candidate is in one of the two at most once, so they
     // never meet, and no slot is read before it is written. It takes the
     // vertices' array, which is used up.
-    let mut parent = crate::pages::filled(k, NONE);
+    let mut parent = crate::pages::filled(k, I::of(NONE));
     let mut cut = crate::pages::reused(candidate_vertex, k, 0u32);
     let (mut front, mut back) = (0usize, k);
     for c in 1..k {
@@ -196,16 +305,20 @@ pub fn merge(
         let y = if jt_up[xi] == 0 {
             // Upper leaf: its edge runs down the join tree.
             let start = jt_parent[xi];
-            let y = climb(&mut jt_parent, start, |y, _| parent[y as usize] != NONE);
+            let y = climb(&mut jt_parent, start, |y, _| {
+                parent[y as usize].get() != NONE
+            });
             jt_up[y as usize] -= 1;
             y
         } else {
             let start = st_parent[xi];
-            let y = climb(&mut st_parent, start, |y, _| parent[y as usize] != NONE);
+            let y = climb(&mut st_parent, start, |y, _| {
+                parent[y as usize].get() != NONE
+            });
             st_down[y as usize] -= 1;
             y
         };
-        parent[xi] = y;
+        parent[xi] = I::of(y);
         let yi = y as usize;
         if y != 0 && jt_up[yi] + st_down[yi] == 1 {
             back -= 1;
@@ -227,16 +340,18 @@ pub fn merge(
     // field holds the size, then the parent's next free slot, which ends as
     // `tout`. No children lists and no path as deep as the tree.
     let cut_order = &cut[..front];
-    let mut subtree = crate::pages::filled(k, [0u32, 1, NONE]);
+    let entry = |[tin, tout, label]: [u32; 3]| [I::of(tin), I::of(tout), I::of(label)];
+    let mut subtree = crate::pages::filled(k, entry([0, 1, NONE]));
+    let parent_of = |x: u32| parent[x as usize].get();
     // Both passes read, at scattered places, a candidate's parent and
     // entry and its parent's entry: fetched ahead from the known order.
-    let ahead = |subtree: &[[u32; 3]], far: Option<&u32>, near: Option<&u32>| {
+    let ahead = |subtree: &[[I; 3]], far: Option<&u32>, near: Option<&u32>| {
         if let Some(&far) = far {
             prefetch(&parent, far as usize);
             prefetch(subtree, far as usize);
         }
         if let Some(&near) = near {
-            prefetch(subtree, parent[near as usize] as usize);
+            prefetch(subtree, parent_of(near) as usize);
         }
     };
     for (i, &x) in cut_order.iter().enumerate() {
@@ -245,31 +360,32 @@ pub fn merge(
             cut_order.get(i + 2 * READ_AHEAD),
             cut_order.get(i + READ_AHEAD),
         );
-        let size = subtree[x as usize][1];
-        subtree[parent[x as usize] as usize][1] += size;
+        let size = subtree[x as usize][1].get();
+        let p = &mut subtree[parent_of(x) as usize][1];
+        *p = I::of(p.get() + size);
     }
     // Superarcs as (end towards the root, end away from it), candidates,
     // made into superarcs in place below: one ends at each supernode but
     // the root.
     let mut arcs: Vec<Superarc> = Vec::with_capacity(supernodes.saturating_sub(1));
     if k > 0 {
-        subtree[0] = [0, 1, NONE];
+        subtree[0] = entry([0, 1, NONE]);
     }
     for (i, &x) in cut_order.iter().enumerate().rev() {
         let before = |d: usize| i.checked_sub(d).map(|j| &cut_order[j]);
         ahead(&subtree, before(2 * READ_AHEAD), before(READ_AHEAD));
-        let p = parent[x as usize];
-        let size = subtree[x as usize][1];
-        let tin = subtree[p as usize][1];
-        subtree[p as usize][1] += size;
+        let p = parent_of(x);
+        let size = subtree[x as usize][1].get();
+        let tin = subtree[p as usize][1].get();
+        subtree[p as usize][1] = I::of(tin + size);
         let l = if supernode.is_node(p) {
             let (upper, lower) = (NodeId(p), NodeId(NONE));
             arcs.push(Superarc { upper, lower });
             arcs.len() as u32 - 1
         } else {
-            subtree[p as usize][2]
+            subtree[p as usize][2].get()
         };
-        subtree[x as usize] = [tin, tin + 1, l];
+        subtree[x as usize] = entry([tin, tin + 1, l]);
         if supernode.is_node(x) {
             arcs[l as usize].lower = NodeId(x);
         }
@@ -287,10 +403,10 @@ pub fn merge(
     // the cut order's array, and gives it back for A's pointers; A and B
     // come after, when the new numbers are let go (4 bytes per candidate
     // fewer at the merge's peak than beside them).
-    let (new_id, spare) = canonical_arc_ids(&arcs, &nodes, cut);
+    let (new_id, spare) = canonical_arc_ids(&arcs, supernodes, cut);
     subtree.par_iter_mut().for_each(|[_, _, l]| {
-        if *l != NONE {
-            *l = new_id[*l as usize];
+        if l.get() != NONE {
+            *l = I::of(new_id[l.get() as usize]);
         }
     });
     drop(new_id);
@@ -300,19 +416,27 @@ pub fn merge(
     progress.check(0, 1)?;
 
     // A and B from the parents; the second takes the parents themselves.
-    // A's copy of them goes where the cut order was, and B's answers where
-    // A's pointers were: pages already touched, none faulted in afresh.
-    let (a_of, pointers) = chain_tops(crate::pages::copied(spare, &parent), true, Vec::new());
+    // A's copy of them goes where the cut order was (in words; packed, in
+    // pages of its own), and B's answers where A's pointers were: pages
+    // already touched, none faulted in afresh.
+    let (a_of, pointers) = chain_tops(
+        crate::pages::copied(I::spare(spare), &parent),
+        true,
+        Vec::new(),
+    );
     progress.check(0, 1)?;
     let (b_of, _) = chain_tops(parent, false, pointers);
     progress.check(0, 1)?;
-    Ok(CandidateTree {
-        nodes,
-        arcs,
-        supernodes: supernode,
+    let chains = Chains {
         a_of,
         b_of,
         subtree,
+    };
+    Ok(CandidateTree {
+        node_vertex,
+        arcs,
+        supernodes: supernode,
+        tables: I::tables(chains),
     })
 }
 
@@ -373,7 +497,7 @@ pub fn reduce_regular_candidates(
         };
         with_words!(record, w => w
             .par_chunks_mut(1 << 14)
-            .for_each(|w| w.iter_mut().for_each(|e| *e = Word::of(renumber(e.get())))));
+            .for_each(|w| w.iter_mut().for_each(|e| *e = Word::of(renumber(Word::get(*e))))));
     }
     let all = Supernodes::new(vertex.len(), |_| true);
     (vertex, all)
@@ -408,6 +532,24 @@ fn reduce_tree(parent: &[u32], kept: &Supernodes, leafward_node: &mut [u32]) -> 
         if p == NONE { NONE } else { kept.node(p) }
     })
 }
+
+/// How a build merges: which candidates it reduces first and whether its
+/// tables may be packed (the tests force each way).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Merging {
+    /// [`reduce_regular_candidates`] runs when at least one vertex in
+    /// this many is a candidate it reduces.
+    pub reduce_share: usize,
+    /// The tables are held in 3 bytes per number where they fit
+    /// ([`packs_tables`]).
+    pub packed: bool,
+}
+
+/// How a build merges, unless a test says otherwise.
+pub(super) const MERGING: Merging = Merging {
+    reduce_share: REDUCED_SHARE,
+    packed: true,
+};
 
 /// [`reduce_regular_candidates`] runs when at least 1 vertex in this many
 /// is a candidate it reduces: a merge on all candidates would then hold at
@@ -494,25 +636,25 @@ impl Supernodes {
 }
 
 /// Each superarc's number in the canonical order, by lower end and then
-/// upper end, without a comparison sort: node `i` is the lower end of
-/// `nodes[i].up` superarcs, so counting places each superarc among those of
-/// its lower end, and those few (one per arc up from a saddle) are then
+/// upper end, without a comparison sort: counting the superarcs of each
+/// of the `nodes` lower ends places each superarc among those of its
+/// lower end, and those few (one per arc up from a saddle) are then
 /// ordered by their upper ends. The canonical order is listed in `spare`'s
 /// allocation, given back with the numbers.
-fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node], spare: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+fn canonical_arc_ids(arcs: &[Superarc], nodes: usize, spare: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
     let lower = |a: u32| arcs[a as usize].lower;
     let upper = |a: u32| arcs[a as usize].upper;
-    let mut next = Vec::with_capacity(nodes.len());
-    let mut first = 0u32;
-    for node in nodes {
-        next.push(first);
-        first += u32::from(node.up);
+    // Each lower end's count, then where its superarcs start.
+    let mut next = vec![0u32; nodes];
+    for arc in arcs {
+        next[arc.lower.0 as usize] += 1;
     }
-    assert_eq!(
-        first as usize,
-        arcs.len(),
-        "every superarc goes up from its lower end"
-    );
+    let mut first = 0u32;
+    for slot in &mut next {
+        let count = *slot;
+        *slot = first;
+        first += count;
+    }
     // The superarcs in the canonical order.
     let mut by_order = crate::pages::reused(spare, arcs.len(), 0u32);
     for (a, arc) in arcs.iter().enumerate() {
@@ -548,13 +690,13 @@ fn canonical_arc_ids(arcs: &[Superarc], nodes: &[Node], spare: Vec<u32>) -> (Vec
 /// candidate beside the answer, and no stack as deep as the tree. The
 /// answers are written into `spare` where it is large enough; the
 /// pointers are given back with them, for the caller to reuse.
-fn chain_tops(parent: Vec<u32>, lower: bool, spare: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+fn chain_tops<I: Id>(parent: Vec<I>, lower: bool, spare: Vec<I>) -> (Vec<I>, Vec<I>) {
     let k = parent.len();
     let mut up = parent;
     // Every answer but the root's is written below.
-    let mut top = crate::pages::reused(spare, k, NONE);
+    let mut top = crate::pages::reused(spare, k, I::of(NONE));
     if let Some(root) = top.first_mut() {
-        *root = NONE;
+        *root = I::of(NONE);
     }
     for i in 1..k {
         let x = if lower { k - i } else { i } as u32;
@@ -562,7 +704,7 @@ fn chain_tops(parent: Vec<u32>, lower: bool, spare: Vec<u32>) -> (Vec<u32>, Vec<
         let visited = |u: u32| u != NONE && (u > x) == lower;
         let t = climb(&mut up, x, |_, next| visited(next));
         // A chain up to the root (candidate 0) has nothing beyond it.
-        top[x as usize] = if t == 0 { NONE } else { t };
+        top[x as usize] = I::of(if t == 0 { NONE } else { t });
     }
     (top, up)
 }
@@ -573,15 +715,15 @@ fn chain_tops(parent: Vec<u32>, lower: bool, spare: Vec<u32>) -> (Vec<u32>, Vec<
 /// 9's lazy contraction (the nearest ancestor not yet cut) and of the
 /// chains of [`chain_tops`].
 #[inline]
-pub(super) fn climb(pointer: &mut [u32], start: u32, go_on: impl Fn(u32, u32) -> bool) -> u32 {
+pub(super) fn climb<I: Id>(pointer: &mut [I], start: u32, go_on: impl Fn(u32, u32) -> bool) -> u32 {
     let mut end = start;
-    while go_on(end, pointer[end as usize]) {
-        end = pointer[end as usize];
+    while go_on(end, pointer[end as usize].get()) {
+        end = pointer[end as usize].get();
     }
     let mut c = start;
     while c != end {
-        let next = pointer[c as usize];
-        pointer[c as usize] = end;
+        let next = pointer[c as usize].get();
+        pointer[c as usize] = I::of(end);
         c = next;
     }
     end
@@ -604,44 +746,80 @@ pub struct Placed {
 /// record and the candidates' tables are gone.
 pub fn place(tree: CandidateTree, join_leafward: Leafward, split_leafward: Leafward) -> Placed {
     let CandidateTree {
-        nodes,
+        node_vertex,
         arcs,
         supernodes,
-        a_of,
-        b_of,
-        subtree,
+        tables,
     } = tree;
-    // Each vertex's place from its two records, written over the first as
-    // the second is given back ([`leafward::combine`]).
-    let vertex_arc = leafward::combine(join_leafward, split_leafward, |j, s| {
-        if j & CANDIDATE != 0 {
-            let c = j & !CANDIDATE;
-            if supernodes.is_node(c) {
-                NODE_FLAG | supernodes.node(c)
-            } else {
-                subtree[c as usize][2]
-            }
-        } else {
-            let [lo, hi, above_a] = match a_of[j as usize] {
-                NONE => [0, 0, NONE],
-                a => subtree[a as usize],
-            };
-            let tb = subtree[s as usize][0];
-            if lo <= tb && tb < hi {
-                match b_of[s as usize] {
-                    NONE => NONE,
-                    b => subtree[b as usize][2],
-                }
-            } else {
-                above_a
-            }
-        }
-    });
+    let vertex_arc = match tables {
+        Tables::Words(chains) => place_with(&chains, &supernodes, join_leafward, split_leafward),
+        Tables::Packed(chains) => place_with(&chains, &supernodes, join_leafward, split_leafward),
+    };
+    let nodes = nodes_of(node_vertex, &arcs);
     Placed {
         nodes,
         arcs,
         vertex_arc,
     }
+}
+
+/// Each vertex's place from its two records, written over the first as
+/// the second is given back ([`leafward::combine`]).
+fn place_with<I: Id>(
+    chains: &Chains<I>,
+    supernodes: &Supernodes,
+    join_leafward: Leafward,
+    split_leafward: Leafward,
+) -> Leafward {
+    let Chains {
+        a_of,
+        b_of,
+        subtree,
+    } = chains;
+    leafward::combine(join_leafward, split_leafward, |j, s| {
+        if j & CANDIDATE != 0 {
+            let c = j & !CANDIDATE;
+            if supernodes.is_node(c) {
+                NODE_FLAG | supernodes.node(c)
+            } else {
+                subtree[c as usize][2].get()
+            }
+        } else {
+            let [lo, hi, above_a] = match a_of[j as usize].get() {
+                NONE => [0, 0, NONE],
+                a => subtree[a as usize].map(Id::get),
+            };
+            let tb = subtree[s as usize][0].get();
+            if lo <= tb && tb < hi {
+                match b_of[s as usize].get() {
+                    NONE => NONE,
+                    b => subtree[b as usize][2].get(),
+                }
+            } else {
+                above_a
+            }
+        }
+    })
+}
+
+/// The supernodes from their vertices and the superarcs: a node's degree
+/// up is the number of superarcs whose lower end it is, down the number
+/// whose upper end it is (its children in the join and split trees,
+/// counted again where the merge cut them down).
+fn nodes_of(node_vertex: Vec<u32>, arcs: &[Superarc]) -> Vec<Node> {
+    let mut nodes: Vec<Node> = node_vertex
+        .into_par_iter()
+        .map(|vertex| Node {
+            vertex,
+            up: 0,
+            down: 0,
+        })
+        .collect();
+    for arc in arcs {
+        nodes[arc.lower.0 as usize].up += 1;
+        nodes[arc.upper.0 as usize].down += 1;
+    }
+    nodes
 }
 
 /// Lays out the regular vertices of each superarc in the vertex `order`:
@@ -1289,6 +1467,19 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        /// A number in 3 bytes reads back as written, `NONE` included, and
+        /// numbers from `Id3::NONE` on do not fit.
+        #[test]
+        fn a_number_in_3_bytes_reads_back(x in 0u32..Id3::NONE, high in any::<u32>()) {
+            prop_assert_eq!(Id3::of(x).get(), x);
+            prop_assert_eq!(Id3::of(NONE).get(), NONE);
+            prop_assert!(packs_tables(x as usize));
+            prop_assert!(!packs_tables(Id3::NONE as usize + (high >> 8) as usize));
+        }
+    }
+
+    proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]
         /// Numbering superarcs by counting their lower ends gives the
         /// order of a comparison sort by (lower, upper).
@@ -1307,13 +1498,9 @@ mod tests {
             arcs.sort_unstable_by_key(|a| (a.upper, a.lower));
             arcs.dedup();
             arcs.sort_by_key(|a| (a.lower.0 ^ a.upper.0).wrapping_mul(0x9E37_79B9));
-            let mut node = vec![Node::default(); nodes as usize];
-            for arc in &arcs {
-                node[arc.lower.0 as usize].up += 1;
-            }
             // A spare allocation of any size, as the merge's is.
             let spare = vec![7u32; (nodes as usize * 3) % 11];
-            let (new_id, _) = canonical_arc_ids(&arcs, &node, spare);
+            let (new_id, _) = canonical_arc_ids(&arcs, nodes as usize, spare);
             let mut placed = vec![None; arcs.len()];
             for (arc, &id) in arcs.iter().zip(&new_id) {
                 prop_assert!(placed[id as usize].replace(*arc).is_none(), "one arc per number");

@@ -215,12 +215,12 @@ pub enum BuildError {
     /// The engine's arrays would not fit in the memory left.
     #[error(
         "the contour tree of these {vertices} vertices needs about {} MiB at its peak beyond the values \
-         ({candidates} candidate nodes, {}% of the vertices: each costs {} bytes in the sweeps and up \
-         to {} at the merge), but only {} MiB are left",
+         ({candidates} candidate nodes, {}% of the vertices: each costs {} bytes in the sweeps and \
+         about {} at the merge), but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
         SWEEP_BYTES_PER_CANDIDATE,
-        MERGE_BYTES_PER_CANDIDATE,
+        merge_bytes_per_candidate(*candidates),
         available >> 20
     )]
     OutOfMemory {
@@ -314,25 +314,40 @@ fn tree_bytes(candidates: usize) -> u64 {
     records_bytes(candidates) / 2 + 4
 }
 
-/// What the candidates' tables hold at the merge's peak: 44 bytes per
-/// candidate (its tables and the tree it builds; fitted to the peaks
-/// measured on tooth, engine and colin27_ch2, within 10 %, above all
-/// three), or, where the candidates regular in both trees are reduced
-/// first ([`merge::reduce_regular_candidates`]), the larger of the
-/// reduction's 14 per candidate and 8 per supernode and the merge's 44 per
-/// supernode.
+/// What the candidates' tables hold at the merge's peak: the merge's
+/// ([`merge_bytes`]) on every candidate, or, where the candidates regular
+/// in both trees are reduced first ([`merge::reduce_regular_candidates`]),
+/// the larger of the reduction's 14 per candidate and 8 per supernode and
+/// the merge's on the supernodes alone.
 fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
     let (k, s) = (candidates as u64, supernodes as u64);
     if merge::reduces(n, candidates, supernodes, merge::REDUCED_SHARE) {
-        (14 * k + 8 * s).max(MERGE_BYTES_PER_CANDIDATE * s)
+        (14 * k + 8 * s).max(merge_bytes(supernodes, supernodes))
     } else {
-        MERGE_BYTES_PER_CANDIDATE * k
+        merge_bytes(candidates, supernodes)
     }
 }
 
-/// What a candidate node costs at the merge's peak (see
-/// [`merge_table_bytes`]).
-const MERGE_BYTES_PER_CANDIDATE: u64 = 44;
+/// What a merge on `merged` candidates, `supernodes` of them supernodes,
+/// holds at its peak (the chains: [`merge`]): per candidate its parent,
+/// the chains' pointers and answers and its subtree entry, six numbers
+/// (18 bytes where they are packed, [`merge::packs_tables`], else 24),
+/// and per supernode its vertex and its superarc (12), with a quarter
+/// more for the heap: measured within it on tooth (34.7 bytes per
+/// supernode where it counts 30), engine and colin27_ch2 (21.7 and 21.4
+/// per candidate where it counts 23.7 and 23.4).
+fn merge_bytes(merged: usize, supernodes: usize) -> u64 {
+    let per = if merge::packs_tables(merged) { 18 } else { 24 };
+    (per * merged as u64 + 12 * supernodes as u64) * 5 / 4
+}
+
+/// What a candidate node costs at the merge's peak, bytes, where half of
+/// them are supernodes and none is reduced: 30 where the tables pack, 37
+/// otherwise.
+fn merge_bytes_per_candidate(candidates: usize) -> u64 {
+    let k = candidates.max(2);
+    merge_bytes(k, k / 2) / k as u64
+}
 
 /// What a candidate node costs while both sweeps run: per sweep its
 /// union-find word and its parent ([`sweep`]; the children counts and
@@ -391,16 +406,23 @@ fn cuts_that_fit<'a>(
 /// again after it: the order is a counting sort (`counting`: 8- and
 /// 16-bit values, O(n)) and the merge, without the order, would still be
 /// above the grouping ([`peak_bytes`]), so that some of the order's cost
-/// comes off the peak. With packed records ([`leafward`]) that takes more
-/// than 1/44 of the vertices as candidates (the merge: 6 bytes per vertex
-/// and 44 per candidate, above the grouping's 7 from 1/44 on; 1/22 while
-/// the grouping held 8, before session 38), else 1/64 (the merge, 8 bytes
-/// per vertex and 44 per candidate, is then the peak by at least 2/3 of a
-/// byte per vertex, worth a counting sort). Volumes of fewer than
-/// [`REMAKE_MIN_VERTICES`] keep their order.
+/// comes off the peak. With packed records ([`leafward`]) that takes the
+/// merge's tables above a byte per vertex (the merge's 6 bytes per vertex
+/// and its tables above the grouping's 7): more than 1/30 of the vertices
+/// as candidates, with half of them supernodes ([`merge_bytes`]; 1/44
+/// before session 39 packed the tables, 1/22 while the grouping held 8,
+/// before session 38). Otherwise (8 bytes per vertex in the records and
+/// in the grouping) where they are above 2/3 of a byte per vertex: the
+/// merge is then the peak by that much, worth a counting sort. Volumes of
+/// fewer than [`REMAKE_MIN_VERTICES`] keep their order.
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    let per = if leafward::packs(candidates) { 44 } else { 64 };
-    counting && n >= REMAKE_MIN_VERTICES && candidates as u64 * per > n as u64
+    let tables = merge_bytes(candidates, candidates / 2);
+    let above = if leafward::packs(candidates) {
+        tables > n as u64
+    } else {
+        3 * tables > 2 * n as u64
+    };
+    counting && n >= REMAKE_MIN_VERTICES && above
 }
 
 /// Below this many vertices an order let go does not lower the peak: its
@@ -527,7 +549,7 @@ impl ContourTree {
         let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
         let source = OrderSource::Owned(order, counting.then_some(&remake));
-        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, cuts.as_deref(), merge::REDUCED_SHARE, progress))?;
+        let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, cuts.as_deref(), merge::MERGING, progress))?;
         times.sort += sort;
         Ok((tree, times))
     }
@@ -542,7 +564,7 @@ impl ContourTree {
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let order = OrderSource::Borrowed(order);
-        Self::build_from(mesh, values, order, None, merge::REDUCED_SHARE, progress)
+        Self::build_from(mesh, values, order, None, merge::MERGING, progress)
     }
 
     /// [`Self::build`] with the join and split trees computed in the blocks
@@ -560,7 +582,7 @@ impl ContourTree {
             values,
             OrderSource::Borrowed(order),
             Some(cuts),
-            merge::REDUCED_SHARE,
+            merge::MERGING,
             progress,
         )
     }
@@ -570,14 +592,15 @@ impl ContourTree {
     /// no `cuts` given, the blocks are chosen for the machine once the
     /// candidates are counted ([`blocks::chosen_blocks`]). The candidates
     /// regular in both trees are reduced before the merge when at least
-    /// one vertex in `reduce_share` is one
-    /// ([`merge::reduce_regular_candidates`]; the tests force both ways).
+    /// one vertex in `merging.reduce_share` is one
+    /// ([`merge::reduce_regular_candidates`]), and the merge's tables
+    /// packed where `merging.packed` (the tests force each way).
     fn build_from<M: Mesh, O: VertexOrder + ?Sized>(
         mesh: &M,
         values: &O,
         mut source: OrderSource<'_>,
         cuts: Option<&[u32]>,
-        reduce_share: usize,
+        merging: merge::Merging,
         progress: &Progress,
     ) -> Result<(Self, BuildTimes), BuildError> {
         let order = source.order();
@@ -649,9 +672,10 @@ impl ContourTree {
             supernodes,
             &mut join_leafward,
             &mut split_leafward,
-            reduce_share,
+            merging.reduce_share,
         );
-        let merged = merge::merge(join, split, candidate_vertex, supernodes, progress)?;
+        let packed = merging.packed;
+        let merged = merge::merge(join, split, candidate_vertex, supernodes, packed, progress)?;
         times.merge = t.elapsed();
         progress.stage("augment");
         let t = Instant::now();
@@ -931,12 +955,14 @@ mod tests {
         // so the other 14 % are reduced before the merge): the sweeps'
         // 14.48 bytes per vertex fit on a 24 GiB machine with the order let
         // go and remade (4.48 GiB left beside the 10 already held), not
-        // with 4.47; held through the merge, the merge's 16.16 need 6.16.
+        // with 4.47; held through the merge, the merge's 16.3 (its tables
+        // in 4 bytes per number: over 2^24 candidates) need 6.3.
         let noisy = n * 28 / 100;
         assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
         assert!(check_memory(n, noisy, order, true, 4490 * (gib / 1000)).is_ok());
         assert!(check_memory(n, noisy, order, true, 4470 * (gib / 1000)).is_err());
-        assert!(check_memory(n, noisy, order, false, 6170 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, false, 6310 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, false, 6290 * (gib / 1000)).is_err());
         let e = check_memory(n, noisy, order, false, 6 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
@@ -951,17 +977,22 @@ mod tests {
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
         assert!(message.contains("16 bytes in the sweeps"), "{message}");
-        assert!(message.contains("up to 44"), "{message}");
+        assert!(message.contains("about 37 at the merge"), "{message}");
         // Once the sweeps tell the supernodes: 8 % (the noisy 1024³ scan
         // of the README) are reduced to and the merge needs no more than
         // the sweeps held; 20 % are not, and the merge on all candidates
-        // needs 20.32 bytes per vertex, 6.4 GiB beyond the 13.92 held.
+        // needs 19.4 bytes per vertex, 5.48 GiB beyond the 13.92 held.
         let (few, many) = (n * 8 / 100, n * 20 / 100);
         assert!(check_merge_memory(n, noisy, few, order, true, 0).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 6500 * (gib / 1000)).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 6 * gib).is_err());
+        assert!(check_merge_memory(n, noisy, many, order, true, 5490 * (gib / 1000)).is_ok());
+        assert!(check_merge_memory(n, noisy, many, order, true, 5470 * (gib / 1000)).is_err());
         // Held through the merge, the order needs its 2 more.
-        assert!(check_merge_memory(n, noisy, many, order, false, 8 * gib).is_err());
+        assert!(check_merge_memory(n, noisy, many, order, false, 7470 * (gib / 1000)).is_err());
+        assert!(check_merge_memory(n, noisy, many, order, false, 7490 * (gib / 1000)).is_ok());
+        // Fewer than 2^24 candidates: the tables in 3 bytes per number,
+        // 30 bytes per candidate where half are supernodes.
+        assert_eq!(merge_bytes_per_candidate(1 << 20), 30);
+        assert_eq!(merge_bytes_per_candidate(noisy), 37);
         // Exactly at the limit is allowed, a byte more is not.
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * 1000;
@@ -983,27 +1014,28 @@ mod tests {
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
-        // candidates), below 1/44 of the vertices the grouping or the
+        // candidates), below 1/30 of the vertices the grouping or the
         // sweeps stay the peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(!remakes_order(n, n / 50, true));
-        assert!(remakes_order(n, n / 40, true));
+        assert!(!remakes_order(n, n / 32, true));
+        assert!(remakes_order(n, n / 28, true));
         let huge = 1usize << 30;
-        assert!(remakes_order(huge, huge / 60, true), "unpacked: 1/64");
+        assert!(remakes_order(huge, huge / 50, true), "unpacked: 1/56");
+        assert!(!remakes_order(huge, huge / 60, true), "unpacked: 1/56");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 40, n / 20, n / 16, n / 4, n / 2] {
+            for k in [n / 28, n / 20, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
-            for k in [0, n / 64, n / 50] {
+            for k in [0, n / 64, n / 50, n / 32] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
             }
-            let (k, order_bytes) = (huge / 60, per_vertex * huge as u64);
+            let (k, order_bytes) = (huge / 50, per_vertex * huge as u64);
             assert!(
                 peak_bytes(huge, k, order_bytes, true) < peak_bytes(huge, k, order_bytes, false)
             );
@@ -1052,17 +1084,27 @@ mod tests {
         // whenever there is one, and never: the same tree.
         let mesh = field.mesh();
         let cuts = blocks::even_cuts(field.len(), 1);
-        for share in [usize::MAX, 0] {
+        // Its tables in 3 bytes per number and in 4.
+        for (reduce_share, packed) in [
+            (usize::MAX, true),
+            (0, true),
+            (usize::MAX, false),
+            (0, false),
+        ] {
+            let merging = merge::Merging {
+                reduce_share,
+                packed,
+            };
             let (tree, _) = crate::with_values!(field.values(), v => ContourTree::build_from(
                 &mesh,
                 v.as_slice(),
                 OrderSource::Borrowed(&order),
                 Some(&cuts),
-                share,
+                merging,
                 &Progress::new(),
             ))
             .expect("tree");
-            assert_eq!(parts(&tree), parts(&oracle), "dims {dims:?}, share {share}");
+            assert_eq!(parts(&tree), parts(&oracle), "dims {dims:?}, {merging:?}");
         }
     }
 
