@@ -412,7 +412,7 @@ fn sweep_blocks<M: Mesh, O: VertexOrder + ?Sized, W: Word>(
             if progress.is_cancelled() {
                 return Err(Cancelled);
             }
-            let tree = sweep::sweep::<M, O, W, true>(
+            let tree = sweep::sweep::<M, O, W, u32, true>(
                 mesh,
                 values,
                 nodes_in[b],

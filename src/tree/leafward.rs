@@ -96,6 +96,26 @@ pub fn packs(candidates: usize) -> bool {
     candidates < PACKED_CANDIDATE as usize && cfg!(target_endian = "little")
 }
 
+/// True when the candidates' own tables are packed too, in 3 bytes per
+/// number: the sweeps' union-finds ([`super::sweep`]) and the merge's
+/// tables ([`super::merge`]). Where the records pack and at least one
+/// vertex in `share` of the `n` is a candidate ([`PACKED_TABLES_SHARE`],
+/// unless a test says otherwise): a noisy
+/// scan, whose sweeps' 16 bytes per candidate (14 so) set its peak (tooth
+/// 12.1 bytes per vertex, 11.4-11.5 so). Elsewhere the tables are not
+/// what the peak is made of, and reading numbers of 3 bytes costs time
+/// where they are read the most: with a packed union-find, a scan's or a
+/// smooth field's sweeps took 20-30 % longer (aneurism 0.097 -> 0.129 s,
+/// `synthetic:256` 0.097 -> 0.115, one sweep), with packed tables the
+/// placement 25-40 % (colin27_ch2better 0.14 -> 0.20 s); tooth's sweeps
+/// 3-6 %.
+pub fn packs_tables(n: usize, candidates: usize, share: usize) -> bool {
+    packs(candidates) && candidates.saturating_mul(share) >= n
+}
+
+/// See [`packs_tables`].
+pub const PACKED_TABLES_SHARE: usize = 8;
+
 /// Runs `$body` with `$w` bound to the record's entries as a mutable slice
 /// of its [`Word`]s (`u32` or `[u8; 3]`).
 macro_rules! with_words {

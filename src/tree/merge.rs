@@ -228,19 +228,14 @@ impl Id for Id3 {
     }
 }
 
-/// True where a merge on `candidates` candidates holds its tables in 3
-/// bytes per number ([`Id3`]): every pre-order position and superarc
-/// number is at most the candidates' count.
-pub(super) fn packs_tables(candidates: usize) -> bool {
-    candidates < Id3::NONE as usize
-}
-
 /// Merges the join and split trees (see the module documentation).
 /// `candidate_vertex` lists the candidates' vertices, ascending, and
 /// `supernode` which of them are supernodes ([`Supernodes::of_trees`]).
 /// Arrays are dropped as soon as they are used up: on white noise about
 /// half the vertices are candidates. The candidates' tables are held in 3
-/// bytes per number where `packed` and they fit ([`packs_tables`]).
+/// bytes per number where `packed` ([`leafward::packs_tables`]) and they
+/// fit: every pre-order position and superarc number is at most the
+/// candidates' count, below [`Id3::NONE`].
 pub fn merge(
     join: JoinTree,
     split: SplitTree,
@@ -249,7 +244,7 @@ pub fn merge(
     packed: bool,
     progress: &Progress,
 ) -> Result<CandidateTree, Cancelled> {
-    if packed && packs_tables(candidate_vertex.len()) {
+    if packed && candidate_vertex.len() < Id3::NONE as usize {
         merge_in::<Id3>(join, split, candidate_vertex, supernode, progress)
     } else {
         merge_in::<u32>(join, split, candidate_vertex, supernode, progress)
@@ -540,15 +535,15 @@ pub(super) struct Merging {
     /// [`reduce_regular_candidates`] runs when at least one vertex in
     /// this many is a candidate it reduces.
     pub reduce_share: usize,
-    /// The tables are held in 3 bytes per number where they fit
-    /// ([`packs_tables`]).
-    pub packed: bool,
+    /// The tables are held in 3 bytes per number where at least one
+    /// vertex in this many is a candidate ([`leafward::packs_tables`]).
+    pub packed_share: usize,
 }
 
 /// How a build merges, unless a test says otherwise.
 pub(super) const MERGING: Merging = Merging {
     reduce_share: REDUCED_SHARE,
-    packed: true,
+    packed_share: leafward::PACKED_TABLES_SHARE,
 };
 
 /// [`reduce_regular_candidates`] runs when at least 1 vertex in this many
@@ -1468,14 +1463,11 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(2000))]
-        /// A number in 3 bytes reads back as written, `NONE` included, and
-        /// numbers from `Id3::NONE` on do not fit.
+        /// A number in 3 bytes reads back as written, `NONE` included.
         #[test]
-        fn a_number_in_3_bytes_reads_back(x in 0u32..Id3::NONE, high in any::<u32>()) {
+        fn a_number_in_3_bytes_reads_back(x in 0u32..Id3::NONE) {
             prop_assert_eq!(Id3::of(x).get(), x);
             prop_assert_eq!(Id3::of(NONE).get(), NONE);
-            prop_assert!(packs_tables(x as usize));
-            prop_assert!(!packs_tables(Id3::NONE as usize + (high >> 8) as usize));
         }
     }
 

@@ -219,8 +219,8 @@ pub enum BuildError {
          about {} at the merge), but only {} MiB are left",
         needed >> 20,
         (*candidates as f64 * 100.0 / (*vertices).max(1) as f64).round(),
-        SWEEP_BYTES_PER_CANDIDATE,
-        merge_bytes_per_candidate(*candidates),
+        sweep_bytes_per_candidate(*vertices, *candidates),
+        merge_bytes_per_candidate(*vertices, *candidates),
         available >> 20
     )]
     OutOfMemory {
@@ -296,7 +296,8 @@ fn peak_bytes_of(
     order_remade: bool,
 ) -> u64 {
     let records = records_bytes(candidates) * n as u64;
-    let sweeps = order_bytes + records + SWEEP_BYTES_PER_CANDIDATE * candidates as u64;
+    let sweeps =
+        order_bytes + records + sweep_bytes_per_candidate(n, candidates) * candidates as u64;
     let merge = records + merge_table_bytes(n, candidates, supernodes);
     let held = if order_remade { 0 } else { order_bytes };
     let grouping = order_bytes + tree_bytes(candidates) * n as u64;
@@ -321,38 +322,48 @@ fn tree_bytes(candidates: usize) -> u64 {
 /// the merge's on the supernodes alone.
 fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
     let (k, s) = (candidates as u64, supernodes as u64);
+    let packed = packs_tables(n, candidates);
     if merge::reduces(n, candidates, supernodes, merge::REDUCED_SHARE) {
-        (14 * k + 8 * s).max(merge_bytes(supernodes, supernodes))
+        (14 * k + 8 * s).max(merge_bytes(packed, supernodes, supernodes))
     } else {
-        merge_bytes(candidates, supernodes)
+        merge_bytes(packed, candidates, supernodes)
     }
 }
 
 /// What a merge on `merged` candidates, `supernodes` of them supernodes,
 /// holds at its peak (the chains: [`merge`]): per candidate its parent,
 /// the chains' pointers and answers and its subtree entry, six numbers
-/// (18 bytes where they are packed, [`merge::packs_tables`], else 24),
+/// (18 bytes where they are `packed`, [`leafward::packs_tables`], else 24),
 /// and per supernode its vertex and its superarc (12), with a quarter
 /// more for the heap: measured within it on tooth (34.7 bytes per
 /// supernode where it counts 30), engine and colin27_ch2 (21.7 and 21.4
 /// per candidate where it counts 23.7 and 23.4).
-fn merge_bytes(merged: usize, supernodes: usize) -> u64 {
-    let per = if merge::packs_tables(merged) { 18 } else { 24 };
+fn merge_bytes(packed: bool, merged: usize, supernodes: usize) -> u64 {
+    let per = if packed { 18 } else { 24 };
     (per * merged as u64 + 12 * supernodes as u64) * 5 / 4
 }
 
 /// What a candidate node costs at the merge's peak, bytes, where half of
 /// them are supernodes and none is reduced: 30 where the tables pack, 37
 /// otherwise.
-fn merge_bytes_per_candidate(candidates: usize) -> u64 {
+fn merge_bytes_per_candidate(n: usize, candidates: usize) -> u64 {
     let k = candidates.max(2);
-    merge_bytes(k, k / 2) / k as u64
+    merge_bytes(packs_tables(n, k), k, k / 2) / k as u64
+}
+
+/// True where a build of `n` vertices and this many candidates holds the
+/// candidates' tables in 3 bytes per number ([`leafward::packs_tables`]).
+fn packs_tables(n: usize, candidates: usize) -> bool {
+    leafward::packs_tables(n, candidates, leafward::PACKED_TABLES_SHARE)
 }
 
 /// What a candidate node costs while both sweeps run: per sweep its
-/// union-find word and its parent ([`sweep`]; the children counts and
-/// the candidates' vertices come once the union-finds are let go).
-const SWEEP_BYTES_PER_CANDIDATE: u64 = 16;
+/// union-find entry (3 bytes where the tables pack, else 4) and its
+/// parent ([`sweep`]; the children counts and the candidates' vertices
+/// come once the union-finds are let go).
+fn sweep_bytes_per_candidate(n: usize, candidates: usize) -> u64 {
+    if packs_tables(n, candidates) { 14 } else { 16 }
+}
 
 /// What a node of the blocks (a candidate or a band vertex) costs beyond
 /// the order and the records while the blocks are glued, both directions
@@ -408,15 +419,15 @@ fn cuts_that_fit<'a>(
 /// above the grouping ([`peak_bytes`]), so that some of the order's cost
 /// comes off the peak. With packed records ([`leafward`]) that takes the
 /// merge's tables above a byte per vertex (the merge's 6 bytes per vertex
-/// and its tables above the grouping's 7): more than 1/30 of the vertices
-/// as candidates, with half of them supernodes ([`merge_bytes`]; 1/44
-/// before session 39 packed the tables, 1/22 while the grouping held 8,
-/// before session 38). Otherwise (8 bytes per vertex in the records and
+/// and its tables above the grouping's 7): more than 1/37.5 of the
+/// vertices as candidates, with half of them supernodes ([`merge_bytes`];
+/// 1/44 before session 39, 1/22 while the grouping held 8, before session
+/// 38). Otherwise (8 bytes per vertex in the records and
 /// in the grouping) where they are above 2/3 of a byte per vertex: the
 /// merge is then the peak by that much, worth a counting sort. Volumes of
 /// fewer than [`REMAKE_MIN_VERTICES`] keep their order.
 pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
-    let tables = merge_bytes(candidates, candidates / 2);
+    let tables = merge_bytes(packs_tables(n, candidates), candidates, candidates / 2);
     let above = if leafward::packs(candidates) {
         tables > n as u64
     } else {
@@ -674,7 +685,7 @@ impl ContourTree {
             &mut split_leafward,
             merging.reduce_share,
         );
-        let packed = merging.packed;
+        let packed = leafward::packs_tables(n, candidates, merging.packed_share);
         let merged = merge::merge(join, split, candidate_vertex, supernodes, packed, progress)?;
         times.merge = t.elapsed();
         progress.stage("augment");
@@ -991,8 +1002,9 @@ mod tests {
         assert!(check_merge_memory(n, noisy, many, order, false, 7490 * (gib / 1000)).is_ok());
         // Fewer than 2^24 candidates: the tables in 3 bytes per number,
         // 30 bytes per candidate where half are supernodes.
-        assert_eq!(merge_bytes_per_candidate(1 << 20), 30);
-        assert_eq!(merge_bytes_per_candidate(noisy), 37);
+        assert_eq!(merge_bytes_per_candidate(1 << 22, 1 << 20), 30);
+        assert_eq!(merge_bytes_per_candidate(1 << 24, 1 << 20), 37);
+        assert_eq!(merge_bytes_per_candidate(n, noisy), 37);
         // Exactly at the limit is allowed, a byte more is not.
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * 1000;
@@ -1014,24 +1026,25 @@ mod tests {
         // Smooth fields and floats keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
-        // candidates), below 1/30 of the vertices the grouping or the
-        // sweeps stay the peak.
+        // candidates, the tables in 4 bytes per number: fewer than 1/8),
+        // below 1/37.5 of the vertices the grouping or the sweeps stay the
+        // peak.
         assert!(!remakes_order(n, n / 100, true));
         assert!(!remakes_order(n, n / 4, false));
-        assert!(!remakes_order(n, n / 32, true));
-        assert!(remakes_order(n, n / 28, true));
+        assert!(!remakes_order(n, n / 40, true));
+        assert!(remakes_order(n, n / 36, true));
         let huge = 1usize << 30;
         assert!(remakes_order(huge, huge / 50, true), "unpacked: 1/56");
         assert!(!remakes_order(huge, huge / 60, true), "unpacked: 1/56");
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
-            for k in [n / 28, n / 20, n / 16, n / 4, n / 2] {
+            for k in [n / 36, n / 20, n / 16, n / 4, n / 2] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 let remade = peak_bytes(n, k, order_bytes, true);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
-            for k in [0, n / 64, n / 50, n / 32] {
+            for k in [0, n / 64, n / 50, n / 40] {
                 let held = peak_bytes(n, k, order_bytes, false);
                 assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
             }
@@ -1085,15 +1098,15 @@ mod tests {
         let mesh = field.mesh();
         let cuts = blocks::even_cuts(field.len(), 1);
         // Its tables in 3 bytes per number and in 4.
-        for (reduce_share, packed) in [
-            (usize::MAX, true),
-            (0, true),
-            (usize::MAX, false),
-            (0, false),
+        for (reduce_share, packed_share) in [
+            (usize::MAX, usize::MAX),
+            (0, usize::MAX),
+            (usize::MAX, 0),
+            (0, 0),
         ] {
             let merging = merge::Merging {
                 reduce_share,
-                packed,
+                packed_share,
             };
             let (tree, _) = crate::with_values!(field.values(), v => ContourTree::build_from(
                 &mesh,

@@ -194,8 +194,10 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
     let n = mesh.num_vertices();
     debug_assert_eq!(words.len(), n);
     let block = Block::new(0, n as u32, n, 0);
-    let swept = with_words!(&mut words, w => sweep::<M, O, _, false>(
-        mesh, values, candidates, join, order, block, w, false, progress, report,
+    // The union-find in the records' 3 bytes where the tables pack.
+    let packed = leafward::packs_tables(n, candidates, leafward::PACKED_TABLES_SHARE);
+    let swept = with_words!(&mut words, w => sweep_whole(
+        mesh, values, candidates, join, order, block, w, packed, progress, report,
     ))?;
     Ok(SweepTree {
         parent: swept.parent,
@@ -203,6 +205,32 @@ pub(super) fn whole<M: Mesh, O: VertexOrder + ?Sized>(
         leafward: words,
         vertex: Vec::new(),
     })
+}
+
+/// [`sweep`] of the whole mesh, its union-find in the records' width
+/// where `packed`, else in words.
+#[allow(clippy::too_many_arguments)]
+fn sweep_whole<M: Mesh, O: VertexOrder + ?Sized, W: Word>(
+    mesh: &M,
+    values: &O,
+    candidates: usize,
+    join: bool,
+    order: OrderView<'_>,
+    block: Block,
+    words: &mut [W],
+    packed: bool,
+    progress: &Progress,
+    report: bool,
+) -> Result<BlockTree, Cancelled> {
+    if packed {
+        sweep::<M, O, W, W, false>(
+            mesh, values, candidates, join, order, block, words, false, progress, report,
+        )
+    } else {
+        sweep::<M, O, W, u32, false>(
+            mesh, values, candidates, join, order, block, words, false, progress, report,
+        )
+    }
 }
 
 impl SweepTree {
@@ -336,7 +364,7 @@ pub(super) struct BlockTree {
 /// never a union-find node: it costs one read of a neighbour's word, a
 /// `find` in the (on smooth fields, cache-sized) node forest and one write.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bool>(
+pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, U: Word, const BLOCKED: bool>(
     mesh: &M,
     values: &O,
     nodes: usize,
@@ -355,9 +383,11 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
     // compiled loop each, so the whole sweep pays nothing for blocks).
     debug_assert!(BLOCKED || (lo == 0 && block.hi as usize == n));
     // uf[c]: ROOT | last node of the component at a root, otherwise the
-    // parent in the union-find forest.
-    let mut uf_words = crate::pages::filled(UF_SHIFT + nodes, NONE);
-    let uf = &mut uf_words[UF_SHIFT..];
+    // parent in the union-find forest; held as `U`, whose value is only
+    // its type: 3 bytes where the tables pack ([`leafward::packs_tables`]).
+    let shift = UF_SHIFT * 4 / size_of::<U>();
+    let mut uf_words = crate::pages::filled(shift + nodes, U::of(0));
+    let uf = &mut uf_words[shift..];
     let mut parent = crate::pages::filled(nodes, NONE);
     let mut vertex = vec![0u32; if keep_vertex { nodes } else { 0 }];
     let mut candidate = vec![false; if BLOCKED && keep_vertex { nodes } else { 0 }];
@@ -443,7 +473,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 // remembers its last node. Nothing else.
                 let u = mesh.neighbour_at(v, code);
                 let r = find(uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
-                leafward[(v - lo) as usize] = W::of(uf[r as usize] & !ROOT);
+                leafward[(v - lo) as usize] = W::of(uf[r as usize].get() & !ROOT);
                 continue;
             }
             let kid = if join {
@@ -461,7 +491,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 }
             }
             let mut root = kid;
-            uf[kid as usize] = ROOT | kid;
+            uf[kid as usize] = U::of(ROOT | kid);
             // One representative per component of the swept part of v's
             // link (inside the block).
             reps.clear();
@@ -492,7 +522,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, const BLOCKED: bo
                 }
                 // Component r is absorbed at v: the tree edge runs from its
                 // last node to v.
-                let last = uf[r as usize] & !ROOT;
+                let last = uf[r as usize].get() & !ROOT;
                 parent[last as usize] = kid;
                 root = union(uf, root, r, kid, (root > r) == join);
             }
@@ -539,14 +569,14 @@ const UF_SHIFT: usize = 1040;
 /// Which root survives never shows in the trees: they depend only on the
 /// components.
 #[inline(always)]
-pub(super) fn union(uf: &mut [u32], root: u32, r: u32, kid: u32, root_stays: bool) -> u32 {
+pub(super) fn union<U: Word>(uf: &mut [U], root: u32, r: u32, kid: u32, root_stays: bool) -> u32 {
     let (hi, lo) = if root != kid && root_stays {
         (root, r)
     } else {
         (r, root)
     };
-    uf[lo as usize] = hi;
-    uf[hi as usize] = ROOT | kid;
+    uf[lo as usize] = U::of(hi);
+    uf[hi as usize] = U::of(ROOT | kid);
     hi
 }
 
@@ -561,17 +591,17 @@ pub(super) fn link_rank(x: u32) -> u32 {
 
 /// Root of `x`'s set, halving the path on the way.
 #[inline(always)]
-pub(super) fn find(uf: &mut [u32], mut x: u32) -> u32 {
+pub(super) fn find<U: Word>(uf: &mut [U], mut x: u32) -> u32 {
     loop {
-        let p = uf[x as usize];
+        let p = uf[x as usize].get();
         if p & ROOT != 0 {
             return x;
         }
-        let gp = uf[p as usize];
+        let gp = uf[p as usize].get();
         if gp & ROOT != 0 {
             return p;
         }
-        uf[x as usize] = gp;
+        uf[x as usize] = U::of(gp);
         x = gp;
     }
 }
