@@ -18,6 +18,10 @@
 //! did, and the finished tree keeps them so (`ContourTree::place` reads
 //! them): 3 bytes per vertex, not 4.
 //!
+//! The candidates' own tables (each sweep's union-find, the merge's
+//! tables) are packed alike on noisy scans, where they weigh on the peak
+//! ([`packs_tables`]).
+//!
 //! The link pass counts the candidates while it writes the codes, so a
 //! record starts packed and is widened in place ([`Leafward::widen`]) if
 //! the candidates (or, in blocks, a block's nodes) turn out too many.

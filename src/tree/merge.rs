@@ -90,24 +90,36 @@
 //! **Memory** (n vertices, c candidates, s supernodes, beyond the values):
 //! 6 bytes per vertex (the two leafward records, 3 bytes each where the
 //! candidates are fewer than 2^23, else 8) and, at the merge's peak
-//! (the chains), 24 per candidate (the parents, the records, the chain
-//! pointers and answers, one bit for "is a supernode" with a count per 64
-//! in place of a table of supernode numbers) plus 16 per supernode (the
-//! supernodes, with 16-bit degrees, and the superarcs, 8 bytes each,
-//! allocated at their exact size). About half the candidates of a scan
-//! are supernodes: 32 per candidate by this count (34 with 32-bit
-//! degrees), 37-41 measured on tooth, engine and colin27_ch2 (56 with the
-//! depth-first pass and a table of supernode numbers). The cut order
-//! shares one array with the stack of leaves waiting to be cut, and then
-//! with the superarcs' canonical order, counted before the chains rather
-//! than beside them; the superarcs are made in place from their ends.
-//! Where the reduction runs, the merge's candidates are the supernodes
-//! (40 per supernode, measured on tooth; the memory model keeps 44 as its
-//! bound), and the reduction itself holds 14 per candidate (both
-//! trees' parents and child counts, the candidates' vertices, one map of
-//! 4 bytes) and 8 per supernode: on tooth (31 % candidates, 15 %
-//! supernodes) 6 + 5.9 bytes per vertex at the merge (6 + 6.6 at 44 per
-//! supernode, 6 + 13.6 before the reduction).
+//! (the chains), 24 per candidate (the parents, the chain pointers and
+//! answers, the subtree entries; one bit for "is a supernode" with a
+//! count per 64 in place of a table of supernode numbers) plus 12 per
+//! supernode (its vertex and its superarc, 8 bytes, allocated at their
+//! exact size). The supernodes themselves ([`Node`], 8 bytes with their
+//! degrees) are made only once every vertex is placed, from their
+//! vertices and the superarcs (a node's degree up is the superarcs whose
+//! lower end it is): 4 bytes per supernode less through the merge and
+//! the placement than while they were made first (session 39). Where at
+//! least one vertex in 8 is a candidate (a noisy scan, where the merge can
+//! be the build's peak) the candidates' numbers are held in 3 bytes each
+//! ([`Id3`], [`leafward::packs_tables`]): 18 per candidate, not 24.
+//! Elsewhere they stay in words: there they are no part of the peak, and
+//! the placement, which reads them for every vertex, took 25-40 % longer
+//! packed (colin27_ch2better 0.14 -> 0.20 s). About half the candidates
+//! of a scan are supernodes: 30 per candidate by this count (32 before
+//! session 39; 37-41 measured then on tooth, engine and colin27_ch2, 56
+//! with the depth-first pass and a table of supernode numbers). The cut
+//! order shares one
+//! array with the stack of leaves waiting to be cut, and then with the
+//! superarcs' canonical order, counted before the chains rather than
+//! beside them; the superarcs are made in place from their ends. Where
+//! the reduction runs, the merge's candidates are the supernodes (30 per
+//! supernode packed, 34.7 measured on tooth, where it held 40 before
+//! session 39; the memory model counts a quarter more than the tables:
+//! `tree::merge_bytes`), and the reduction itself holds 14 per candidate
+//! (both trees' parents and child counts, the candidates' vertices, one
+//! map of 4 bytes) and 8 per supernode: on tooth (31 % candidates, 15 %
+//! supernodes) 6 + 5.1 bytes per vertex at the merge (6 + 5.9 before
+//! session 39, 6 + 13.6 before the reduction).
 //!
 //! Finally the regular vertices of each superarc are laid out in the vertex
 //! order by one counting pass over the order (the one pass that reads the

@@ -29,13 +29,17 @@
 //! which writes each vertex's place over its entry of the first record,
 //! in the same 3 bytes, and gives the second back (8 otherwise, and 8 at
 //! the grouping).
-//! Candidates add 16 bytes each during the sweeps and about 44 at the
+//! Candidates add 16 bytes each during the sweeps and about 37 at the
 //! merge's peak ([`peak_bytes`]): little on smooth fields (a few per cent
 //! of the vertices), but much on noisy scans (tooth 31 %) and white noise,
 //! where half the vertices are candidates. There about half the
 //! candidates are regular in both trees and are reduced before the merge
-//! ([`merge::reduce_regular_candidates`]): the merge then holds 44 bytes
-//! per supernode, and the reduction 14 per candidate and 8 per supernode.
+//! ([`merge::reduce_regular_candidates`]): the merge then holds about 45
+//! bytes per supernode, and the reduction 14 per candidate and 8 per
+//! supernode. Where at least one vertex in 8 is a candidate and the
+//! records pack, the candidates' own tables are packed too
+//! ([`leafward::packs_tables`]): 14 bytes per candidate in the sweeps and
+//! about 30 at the merge (37.5 per supernode where it is reduced).
 //! So when the order is cheap to
 //! make again (8- and 16-bit values: a counting sort in O(n), most scans)
 //! and the candidates are many, [`ContourTree::from_field`] lets the order
@@ -60,7 +64,11 @@
 //! (session 38) took the peaks of `flexiso bench` about a byte per vertex
 //! lower on every scan whose peak was the placement or the grouping
 //! (colin27_ch2 9.7-9.8 → 8.5-8.8, colin27_ch2better 8.8-8.9 → 7.5),
-//! 10.4 → 10.0 on `synthetic:256` (its sweeps now).
+//! 10.4 → 10.0 on `synthetic:256` (its sweeps now). Making the supernodes
+//! after the placement and packing a noisy scan's tables (session 39)
+//! took tooth from 12.1-12.3 to 11.2-11.9 (its sweeps at 11.5 are the
+//! peak, the finished tree's 11.15 just below) and engine from 9.7 to
+//! 9.5.
 
 pub mod blocks;
 pub mod json;
@@ -336,8 +344,8 @@ fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
 /// (18 bytes where they are `packed`, [`leafward::packs_tables`], else 24),
 /// and per supernode its vertex and its superarc (12), with a quarter
 /// more for the heap: measured within it on tooth (34.7 bytes per
-/// supernode where it counts 30), engine and colin27_ch2 (21.7 and 21.4
-/// per candidate where it counts 23.7 and 23.4).
+/// supernode, packed, where it counts 30) and engine (29.5 per candidate,
+/// in words, where it counts 29.7).
 fn merge_bytes(packed: bool, merged: usize, supernodes: usize) -> u64 {
     let per = if packed { 18 } else { 24 };
     (per * merged as u64 + 12 * supernodes as u64) * 5 / 4

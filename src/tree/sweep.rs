@@ -41,7 +41,10 @@
 //! then candidate number or leafward candidate, packed in 3 bytes while
 //! the candidates number fewer than 2^23: [`super::leafward`], read and
 //! written through [`Word`]; else 4); per candidate 8 bytes (union-find
-//! and parent: the union keeps the older root, so no rank). Once the
+//! and parent: the union keeps the older root, so no rank), 7 where the
+//! candidates' tables are packed ([`leafward::packs_tables`]: a noisy
+//! scan, one vertex in 8 or more a candidate), whose union-find entries
+//! are then 3 bytes, as the records' are. Once the
 //! union-find is let go, each candidate's children are counted (1 byte),
 //! and once both sweeps are done the split tree's list of the candidates'
 //! vertices (4 bytes each) is read off its words.

@@ -66,11 +66,12 @@ pub(crate) use self::check_volume_size as check_dims;
 /// on top of the values themselves (vertex order, the sweeps' word per
 /// vertex, then the augmented tree). The tree module owns the real figure
 /// (`crate::tree`'s module doc): the order (about 1 byte for 8-bit values,
-/// else 4) and 8, plus 16 per *candidate node* in the sweeps and up to 44
-/// at the merge (44 per supernode where the candidates regular in both
-/// trees are reduced first): 9-12 on smooth fields and 8-bit brains,
-/// 12.3-13.2 on noisy scans (tooth, a noisy 1024³ volume), 21 on white
-/// noise. The readers check this a priori figure, that of a noisy scan,
+/// else 4) and 8, plus 16 per *candidate node* in the sweeps and about 37
+/// at the merge (45 per supernode where the candidates regular in both
+/// trees are reduced first; 14, 30 and 37.5 where the candidates' tables
+/// are packed: `crate::tree::leafward::packs_tables`): 7-11 on smooth
+/// fields and 8-bit brains, 11.2-13.2 on noisy scans (tooth, a noisy
+/// 1024³ volume), 21 on white noise. The readers check this a priori figure, that of a noisy scan,
 /// before reading: what the engine holds before it knows the candidates
 /// (the order and the records, at most 12) is below it. `flexiso info`
 /// counts the candidates and quotes `crate::tree::peak_bytes`, and the
