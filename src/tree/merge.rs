@@ -108,10 +108,10 @@
 //! of a scan are supernodes: 30 per candidate by this count (32 before
 //! session 39; 37-41 measured then on tooth, engine and colin27_ch2, 56
 //! with the depth-first pass and a table of supernode numbers). The cut
-//! order shares one
-//! array with the stack of leaves waiting to be cut, and then with the
-//! superarcs' canonical order, counted before the chains rather than
-//! beside them; the superarcs are made in place from their ends. Where
+//! order shares one array with the stack of leaves waiting to be cut, and
+//! then with the superarcs' canonical order, counted before the chains
+//! rather than beside them; the superarcs are made in place from their
+//! ends. Where
 //! the reduction runs, the merge's candidates are the supernodes (30 per
 //! supernode packed, 34.7 measured on tooth, where it held 40 before
 //! session 39; the memory model counts a quarter more than the tables:
@@ -152,7 +152,7 @@ pub struct CandidateTree {
 }
 
 /// The candidates' tables the placement reads, in 3 bytes per number
-/// where the candidates are fewer than [`Id3::NONE`], else 4.
+/// where they are packed ([`leafward::packs_tables`]), else 4.
 pub(super) enum Tables {
     Words(Chains<u32>),
     Packed(Chains<Id3>),
@@ -170,9 +170,9 @@ pub(super) struct Chains<I> {
 }
 
 /// A candidate's number (or a pre-order position, or a superarc) as the
-/// merge's tables hold it: a word, or 3 bytes where the candidates are
-/// fewer than [`Id3::NONE`] (as the sweeps' records are packed:
-/// [`leafward`]). `NONE` is kept as `NONE`.
+/// merge's tables hold it: a word, or 3 bytes on a noisy scan
+/// ([`leafward::packs_tables`]; as the sweeps' records are packed, but
+/// with all ones for `NONE`).
 pub(super) trait Id: Copy + Send + Sync + std::fmt::Debug {
     /// The number, or `NONE`.
     fn get(self) -> u32;
@@ -562,7 +562,9 @@ pub(super) const MERGING: Merging = Merging {
 /// is a candidate it reduces: a merge on all candidates would then hold at
 /// least 44 / 8 = 5.5 bytes per vertex for them, beside the records' 6,
 /// above the grouping's 8 and the order, so the merge is the build's peak
-/// and the reduction lowers it. Below that the grouping is the peak
+/// and the reduction lowers it (measured when the merge held 44 bytes per
+/// candidate; since session 39 it holds 30-37, and 3.75-4.7 bytes per
+/// vertex beside the records' 6 are still above the grouping's 7). Below that the grouping is the peak
 /// (measured on engine, 6 % reduced: 10.5 bytes per vertex either way),
 /// and the two passes over the records would cost time (engine's merge
 /// 0.06 -> 0.10 s) for nothing.
