@@ -52,7 +52,13 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 # A recovery file of an earlier (killed) run must not greet this one: the
 # program's state lives in this run's folder.
 export XDG_STATE_HOME="$OUT/state"
-sleep 1
+# Xvfb names its display before it takes connections: wait until it does
+# (a fixed second was once too short, under the load of a test run).
+for _ in $(seq 1 100); do
+  xdotool getdisplaygeometry >/dev/null 2>&1 && break
+  sleep 0.2
+done
+xdotool getdisplaygeometry >/dev/null 2>&1 || { echo "screenshot.sh: Xvfb takes no connection on $DISP" >&2; cat "$OUT/xvfb.log" >&2; exit 1; }
 
 DUMP="$OUT/ui.txt"
 rm -f "$DUMP"
