@@ -66,9 +66,9 @@
 //! (colin27_ch2 9.7-9.8 → 8.5-8.8, colin27_ch2better 8.8-8.9 → 7.5),
 //! 10.4 → 10.0 on `synthetic:256` (its sweeps now). Making the supernodes
 //! after the placement and packing a noisy scan's tables (session 39)
-//! took tooth from 12.1-12.3 to 11.2-11.9 (its sweeps at 11.5 are the
+//! took tooth from 12.1-12.4 to 11.1-11.9 (its sweeps at 11.5 are the
 //! peak, the finished tree's 11.15 just below) and engine from 9.7 to
-//! 9.5.
+//! 9.5-9.6.
 
 pub mod blocks;
 pub mod json;

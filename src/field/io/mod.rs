@@ -70,7 +70,7 @@ pub(crate) use self::check_volume_size as check_dims;
 /// at the merge (45 per supernode where the candidates regular in both
 /// trees are reduced first; 14, 30 and 37.5 where the candidates' tables
 /// are packed: `crate::tree::leafward::packs_tables`): 7-11 on smooth
-/// fields and 8-bit brains, 11.2-13.2 on noisy scans (tooth, a noisy
+/// fields and 8-bit brains, 11.1-13.2 on noisy scans (tooth, a noisy
 /// 1024³ volume), 21 on white noise. The readers check this a priori figure, that of a noisy scan,
 /// before reading: what the engine holds before it knows the candidates
 /// (the order and the records, at most 12) is below it. `flexiso info`
