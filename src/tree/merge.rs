@@ -953,10 +953,11 @@ fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized>(
     let ranges: Vec<std::ops::Range<usize>> = (0..n.div_ceil(chunk_len))
         .map(|c| c * chunk_len..((c + 1) * chunk_len).min(n))
         .collect();
-    let mut counts: Vec<Vec<u32>> = if ranges.len() == 1 {
-        // One chunk: its counts are the superarcs' sizes, which any order
-        // gives, so they are read off `vertex_arc` in id order (streaming,
-        // on every core) rather than through the order.
+    let mut counts: Vec<Vec<u32>> = if ranges.len() <= 1 {
+        // One chunk (or none, with no vertex): its counts are the
+        // superarcs' sizes, which any order gives, so they are read off
+        // `vertex_arc` in id order (streaming, on every core) rather than
+        // through the order.
         vec![arc_sizes(vertex_arc, arcs)]
     } else {
         let counts = count_by_spans(order, vertex_arc, &ranges, ends);
