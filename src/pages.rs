@@ -169,6 +169,38 @@ impl<'a, T> DisjointSlots<'a, T> {
         unsafe { self.start.add(i).write(value) };
     }
 
+    /// Reads slot `i` (checked against the length).
+    ///
+    /// # Safety
+    /// No other thread writes slot `i` while the slots are shared.
+    #[inline(always)]
+    pub unsafe fn read(&self, i: usize) -> T
+    where
+        T: Copy,
+    {
+        assert!(i < self.len, "slot {i} of {}", self.len);
+        // SAFETY: in bounds (just checked); the caller guarantees no other
+        // thread writes this slot.
+        unsafe { self.start.add(i).read() }
+    }
+
+    /// A hint that slot `i` will be read soon (nothing if out of range).
+    #[inline(always)]
+    pub fn prefetch(&self, i: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if i < self.len {
+            // SAFETY: a prefetch never faults; the address is in the array.
+            unsafe {
+                std::arch::x86_64::_mm_prefetch(
+                    self.start.add(i) as *const i8,
+                    std::arch::x86_64::_MM_HINT_T0,
+                )
+            };
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = i;
+    }
+
     /// The slots `range` (checked against the length), to write at once.
     ///
     /// # Safety

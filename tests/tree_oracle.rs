@@ -253,15 +253,37 @@ fn sweep_trees_both_ways<M: Mesh>(
         split: words.split.clone().widen(),
         candidates,
     };
-    let ((join, _), (split, _)) =
-        blocks::sweep_trees(mesh, values, words, order.into(), cuts, &p).expect("not cancelled");
-    let ((wide_join, _), (wide_split, _)) =
-        blocks::sweep_trees(mesh, values, wide, order.into(), cuts, &p).expect("not cancelled");
-    assert!(join.0.leafward.is_packed() && !wide_join.0.leafward.is_packed());
+    // The whole sweeps with each candidate's parent written into its word
+    // (what the engine does with words): the same trees, word for word.
+    let whole_words = sweep::LinkWords {
+        join: words.join.clone(),
+        split: words.split.clone(),
+        candidates,
+    };
+    let n = mesh.num_vertices() as u32;
+    let ((in_words_join, _), (mut in_words_split, _)) =
+        blocks::sweep_trees(mesh, values, whole_words, order.into(), &[0, n], true, &p)
+            .expect("not cancelled");
+    in_words_split.0.list_vertices();
+    assert!(!in_words_join.0.leafward.is_packed());
     let widened = |mut t: sweep::SweepTree| {
         t.leafward = t.leafward.widen();
         t
     };
+    assert_eq!(widened(whole.0.0.clone()), in_words_join.0);
+    assert_eq!(widened(whole.1.0.clone()), in_words_split.0);
+    let ((join, _), (mut split, _)) =
+        blocks::sweep_trees(mesh, values, words, order.into(), cuts, false, &p)
+            .expect("not cancelled");
+    let ((wide_join, _), (mut wide_split, _)) =
+        blocks::sweep_trees(mesh, values, wide, order.into(), cuts, false, &p)
+            .expect("not cancelled");
+    // In one block the split tree's vertices are left in its words.
+    if cuts.len() <= 2 {
+        split.0.list_vertices();
+        wide_split.0.list_vertices();
+    }
+    assert!(join.0.leafward.is_packed() && !wide_join.0.leafward.is_packed());
     assert_eq!(widened(join.0.clone()), wide_join.0);
     assert_eq!(widened(split.0.clone()), wide_split.0);
     (whole, (join, split))

@@ -210,14 +210,20 @@ pub const NOISY_SHARE: usize = 10;
 /// The join and split trees of the whole mesh, computed in the blocks
 /// `cuts` defines (`cuts[0] = 0 < cuts[1] < ... = n`) and glued, with the
 /// time each took. Identical to [`sweep::join_tree`] and
-/// [`sweep::split_tree`]. `words` are the sweeps' words seeded with the
-/// link codes ([`sweep::link_words`]).
+/// [`sweep::split_tree`], except that in one block the split tree's
+/// candidates' vertices are not listed (the caller reads them off its
+/// words when it needs them, [`sweep::SweepTree::list_vertices`]). `words`
+/// are the sweeps' words seeded with the link codes
+/// ([`sweep::link_words`]). In one block, where `parents_in_words`, each
+/// candidate's parent is written into its word while sweeping
+/// ([`sweep::sweep_parents_in_words`]).
 pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     mesh: &M,
     values: &O,
     words: LinkWords,
     order: OrderView<'_>,
     cuts: &[u32],
+    parents_in_words: bool,
     progress: &Progress,
 ) -> Result<SweptTrees, Cancelled> {
     let n = mesh.num_vertices();
@@ -232,6 +238,38 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             && cuts.windows(2).all(|w| w[0] < w[1]),
         "cuts run from 0 to n, increasing"
     );
+    if cuts.len() <= 2 && parents_in_words {
+        let (mut join, mut split) = (join_words.into_words(), split_words.into_words());
+        let (j, s) = rayon::join(
+            || {
+                let t = Instant::now();
+                sweep::sweep_parents_in_words(
+                    mesh, values, candidates, true, order, &mut join, progress, true,
+                )
+                .map(|_| t.elapsed())
+            },
+            || {
+                let t = Instant::now();
+                sweep::sweep_parents_in_words(
+                    mesh, values, candidates, false, order, &mut split, progress, false,
+                )
+                .map(|starts| (starts, t.elapsed()))
+            },
+        );
+        let (join_time, (starts, split_time)) = (j?, s?);
+        let (join_parent, split_parent) =
+            sweep::number_candidates(order, &mut join, &mut split, &starts, candidates);
+        return Ok((
+            (
+                JoinTree(sweep::tree_of_parents(join_parent, join)),
+                join_time,
+            ),
+            (
+                SplitTree(sweep::tree_of_parents(split_parent, split)),
+                split_time,
+            ),
+        ));
+    }
     if cuts.len() <= 2 {
         let (join, split) = rayon::join(
             || {
@@ -256,10 +294,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
                 .map(|s| (SplitTree(s), t.elapsed()))
             },
         );
-        let (join, (mut split, split_time)) = (join?, split?);
-        // Once neither sweep holds its union-find.
-        split.0.list_vertices();
-        return Ok((join, (split, split_time)));
+        return Ok((join?, split?));
     }
     let t = Instant::now();
     let span = mesh.edge_span();

@@ -465,12 +465,16 @@ fn merge_in<I: Id>(
 /// On a noisy scan about half the candidates go (tooth 31 % of the
 /// vertices, 15 % supernodes), and every table of the merge that follows
 /// is the supernodes' size: about 40 bytes per supernode at its peak
-/// instead of 40 per candidate. This step holds 14 bytes per candidate and 8 per
-/// supernode. It runs when at least one vertex in `share` is a candidate
-/// to reduce ([`REDUCED_SHARE`]: where it lowers the peak). Takes the
-/// supernodes among the candidates (`kept`, [`Supernodes::of_trees`]) and
-/// returns the candidates' vertices and supernodes after it: the
-/// supernodes' vertices, all of them supernodes, or `candidate_vertex` and
+/// instead of 40 per candidate. This step holds 10 bytes per candidate and
+/// 8 per supernode: both trees' parents and children, and the supernodes'
+/// vertices and new parents; each tree's old parents become its leafward
+/// supernodes in place ([`reduce_tree`]). It runs when at least one vertex
+/// in `share` is a candidate to reduce ([`REDUCED_SHARE`]: where it lowers
+/// the peak). Takes the supernodes among the candidates (`kept`,
+/// [`Supernodes::of_trees`]) and the candidates' vertices (empty: read
+/// off the split tree's record, here only the supernodes') and returns
+/// the candidates' vertices and supernodes after it: the supernodes'
+/// vertices, all of them supernodes, or every candidate's vertex and
 /// `kept` unchanged when it does not run.
 pub fn reduce_regular_candidates(
     join: &mut JoinTree,
@@ -481,17 +485,26 @@ pub fn reduce_regular_candidates(
     split_leafward: &mut Leafward,
     share: usize,
 ) -> (Vec<u32>, Supernodes) {
-    let k = candidate_vertex.len();
+    let k = join.0.parent.len();
+    let listed = !candidate_vertex.is_empty() || k == 0;
     if !reduces(join_leafward.len(), k, kept.count(), share) {
+        if !listed {
+            let all = with_entries!(&*split_leafward, w => super::sweep::candidate_vertices(w, k));
+            return (all, kept);
+        }
         return (candidate_vertex, kept);
     }
-    let vertex = kept.gather(|c| candidate_vertex[c]);
+    let vertex = if listed {
+        kept.gather(|c| candidate_vertex[c])
+    } else {
+        with_entries!(&*split_leafward, w => supernode_vertices(w, &kept))
+    };
     drop(candidate_vertex);
-    // Per candidate, its leafward supernode in the tree at hand (a
-    // supernode's own number at a supernode).
-    let mut leafward_node = crate::pages::filled(k, NONE);
     for (tree, record) in [(&mut join.0, join_leafward), (&mut split.0, split_leafward)] {
-        tree.parent = reduce_tree(&tree.parent, &kept, &mut leafward_node);
+        // Per candidate, its leafward supernode in the tree at hand (a
+        // supernode's own number at a supernode), over its old parents.
+        let mut leafward_node = std::mem::take(&mut tree.parent);
+        tree.parent = reduce_tree(&mut leafward_node, &kept);
         tree.children = kept.gather(|c| tree.children[c]);
         let renumber = |x: u32| {
             let c = x & !CANDIDATE;
@@ -522,26 +535,53 @@ pub(super) fn reduces(n: usize, k: usize, s: usize, share: usize) -> bool {
 /// from its parents on the candidates, on every core. Each supernode walks
 /// down the chain of reduced candidates below it (one child each, so each
 /// of them lies on exactly one such chain) and writes itself as their
-/// leafward supernode in `leafward_node`.
-fn reduce_tree(parent: &[u32], kept: &Supernodes, leafward_node: &mut [u32]) -> Vec<u32> {
-    let slots = crate::pages::DisjointSlots::new(leafward_node);
+/// leafward supernode over their parents in `parent`, which becomes the
+/// candidates' leafward supernodes.
+fn reduce_tree(parent: &mut [u32], kept: &Supernodes) -> Vec<u32> {
+    let slots = crate::pages::DisjointSlots::new(parent);
     kept.gather(|c| {
         let node = kept.node(c as u32);
-        // SAFETY: a supernode's slot is written by its own walk only.
-        unsafe { slots.write(c, node) };
-        let mut p = parent[c];
-        while p != NONE && !kept.is_node(p) {
-            // SAFETY: a reduced candidate has one child, so one supernode's
-            // walk passes it: each slot is written by one thread.
-            unsafe { slots.write(p as usize, node) };
-            p = parent[p as usize];
+        // SAFETY: a supernode's slot is read and written by its own walk
+        // only; a reduced candidate has one child, so one supernode's walk
+        // passes it: each slot is read and written by one thread.
+        unsafe {
+            let mut p = slots.read(c);
+            slots.write(c, node);
+            while p != NONE && !kept.is_node(p) {
+                let below = slots.read(p as usize);
+                slots.write(p as usize, node);
+                p = below;
+            }
+            if p == NONE { NONE } else { kept.node(p) }
         }
-        if p == NONE { NONE } else { kept.node(p) }
     })
 }
 
-/// How a build merges: which candidates it reduces first and whether its
-/// tables may be packed (the tests force each way).
+/// The vertices of the supernodes among the candidates, in their order,
+/// read off a sweep's words (`CANDIDATE | c` at candidate `c`'s vertex),
+/// on every core.
+fn supernode_vertices<W: Word>(words: &[W], kept: &Supernodes) -> Vec<u32> {
+    let mut vertex = crate::pages::filled(kept.count(), 0u32);
+    let out = crate::pages::DisjointSlots::new(&mut vertex);
+    words
+        .par_chunks(1 << 16)
+        .enumerate()
+        .for_each(|(i, chunk)| {
+            let first = (i << 16) as u32;
+            for (j, &w) in chunk.iter().enumerate() {
+                let w = w.get();
+                if w & CANDIDATE != 0 && kept.is_node(w & !CANDIDATE) {
+                    // SAFETY: each supernode is at exactly one vertex.
+                    unsafe { out.write(kept.node(w & !CANDIDATE) as usize, first + j as u32) };
+                }
+            }
+        });
+    vertex
+}
+
+/// How a build sweeps and merges: whether its sweeps write the candidates'
+/// parents into their records, which candidates it reduces first and
+/// whether its tables may be packed (the tests force each way).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Merging {
     /// [`reduce_regular_candidates`] runs when at least one vertex in
@@ -550,12 +590,16 @@ pub(super) struct Merging {
     /// The tables are held in 3 bytes per number where at least one
     /// vertex in this many is a candidate ([`leafward::packs_tables`]).
     pub packed_share: usize,
+    /// Forces [`super::sweep::parents_in_words`] either way (`None`: where
+    /// the records are words).
+    pub parents_in_words: Option<bool>,
 }
 
 /// How a build merges, unless a test says otherwise.
 pub(super) const MERGING: Merging = Merging {
     reduce_share: REDUCED_SHARE,
     packed_share: leafward::PACKED_TABLES_SHARE,
+    parents_in_words: None,
 };
 
 /// [`reduce_regular_candidates`] runs when at least 1 vertex in this many

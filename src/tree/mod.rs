@@ -661,8 +661,9 @@ impl ContourTree {
         };
         let band = blocks::band_vertices(cuts, n, span);
         let cuts = cuts_that_fit(cuts, &whole, candidates, band, available);
+        let parents_in_words = sweep::parents_in_words(n, candidates, merging.parents_in_words);
         let ((mut join, tj), (mut split, ts)) =
-            blocks::sweep_trees(mesh, values, words, order, cuts, progress)?;
+            blocks::sweep_trees(mesh, values, words, order, cuts, parents_in_words, progress)?;
         progress.check(0, 1)?;
         times.join = tj;
         times.split = ts;
@@ -679,6 +680,8 @@ impl ContourTree {
         if remake.is_some() {
             source.let_go();
         }
+        // Empty where the sweeps left them in the split tree's record
+        // (one block): read off it, once the order is let go.
         let candidate_vertex = std::mem::take(&mut split.0.vertex);
         // Held through the merge in 3 bytes per vertex where they fit.
         let empty = || Leafward::Words(Vec::new());
@@ -1106,15 +1109,22 @@ mod tests {
         let mesh = field.mesh();
         let cuts = blocks::even_cuts(field.len(), 1);
         // Its tables in 3 bytes per number and in 4.
-        for (reduce_share, packed_share) in [
-            (usize::MAX, usize::MAX),
-            (0, usize::MAX),
-            (usize::MAX, 0),
-            (0, 0),
+        // Each candidate's parent written into its record while sweeping,
+        // and in a table.
+        for (reduce_share, packed_share, parents_in_words) in [
+            (usize::MAX, usize::MAX, false),
+            (0, usize::MAX, false),
+            (usize::MAX, 0, false),
+            (0, 0, false),
+            (usize::MAX, usize::MAX, true),
+            (0, usize::MAX, true),
+            (usize::MAX, 0, true),
+            (0, 0, true),
         ] {
             let merging = merge::Merging {
                 reduce_share,
                 packed_share,
+                parents_in_words: Some(parents_in_words),
             };
             let (tree, _) = crate::with_values!(field.values(), v => ContourTree::build_from(
                 &mesh,

@@ -240,7 +240,7 @@ impl SweepTree {
     /// Lists the candidates' vertices in `vertex`, read off the words: the
     /// split tree's, once the sweeps have let their union-finds go (4
     /// bytes per candidate fewer at the sweeps' peak).
-    pub(super) fn list_vertices(&mut self) {
+    pub fn list_vertices(&mut self) {
         let candidates = self.parent.len();
         self.vertex = with_words!(&mut self.leafward, w => candidate_vertices(w, candidates));
     }
@@ -248,7 +248,7 @@ impl SweepTree {
 
 /// The vertex of each of the `candidates` candidates from a sweep's words
 /// (`CANDIDATE | c` at candidate `c`'s vertex), on every core.
-fn candidate_vertices<W: Word>(words: &[W], candidates: usize) -> Vec<u32> {
+pub(super) fn candidate_vertices<W: Word>(words: &[W], candidates: usize) -> Vec<u32> {
     let mut vertex = crate::pages::filled(candidates, 0u32);
     let out = crate::pages::DisjointSlots::new(&mut vertex);
     words
@@ -536,18 +536,226 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, U: Word, const BL
     // named it as the parent of its last node: counted now, once the
     // union-find is let go, rather than kept beside it during the sweep.
     drop(uf_words);
-    let mut children = crate::pages::filled(nodes, 0u8);
-    for &p in &parent {
-        if p != NONE {
-            children[p as usize] += 1;
-        }
-    }
+    let children = count_children(&parent);
     Ok(BlockTree {
         parent,
         children,
         vertex,
         candidate,
     })
+}
+
+/// Each node's children, from the nodes' parents.
+fn count_children(parent: &[u32]) -> Vec<u8> {
+    let mut children = crate::pages::filled(parent.len(), 0u8);
+    for &p in parent {
+        if p != NONE {
+            children[p as usize] += 1;
+        }
+    }
+    children
+}
+
+/// True where a build's sweeps write each candidate's parent into its own
+/// word ([`sweep_parents_in_words`]): where its records are words, not
+/// packed ([`leafward::packs`]: 2^23 candidates or more, a noisy scan of a
+/// billion vertices or white noise), unless `forced` says otherwise (the
+/// tests), and where a vertex id leaves the union-find's root bit free.
+pub fn parents_in_words(n: usize, candidates: usize, forced: Option<bool>) -> bool {
+    forced.unwrap_or(!leafward::packs(candidates)) && n <= ROOT as usize
+}
+
+/// The two sweeps of the whole mesh with each candidate's parent written
+/// into its own word, not into a table beside the union-find: per
+/// candidate 4 bytes while sweeping (the union-find), not 8, on the
+/// volumes whose records are words (4 bytes per vertex each:
+/// [`parents_in_words`]), where the candidates are many and their tables
+/// set the peak (the noisy 1024³ scan: 304 M candidates, 28 %; 16 bytes
+/// per candidate were 4.5 bytes per vertex beside the records' 8).
+///
+/// A union-find root's word names the vertex of its component's last
+/// candidate, not its number. When a component is absorbed, its last
+/// candidate's word (until then `CANDIDATE |` its own number) becomes
+/// `CANDIDATE |` the absorbing candidate's number: its parent, which is
+/// in the same component from then on, so that a `find` starting there
+/// still finds it. A vertex that is not a candidate reads its number off
+/// the last candidate's word, which is still its own then. Once both
+/// sweeps are done, [`number_candidates`] reads the parents off the words
+/// and writes each candidate's own number (its rank in the order) back:
+/// the same [`SweepTree`]s as [`whole`] makes.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn sweep_parents_in_words<M: Mesh, O: VertexOrder + ?Sized>(
+    mesh: &M,
+    values: &O,
+    nodes: usize,
+    join: bool,
+    order: OrderView<'_>,
+    words: &mut [u32],
+    progress: &Progress,
+    report: bool,
+) -> Result<Vec<u32>, Cancelled> {
+    let n = order.len();
+    debug_assert_eq!(words.len(), n);
+    debug_assert!(n <= ROOT as usize);
+    let mut uf_words = crate::pages::filled(UF_SHIFT + nodes, 0u32);
+    let uf = &mut uf_words[UF_SHIFT..];
+    let mut reps: Vec<u32> = Vec::with_capacity(16);
+    let mut next: u32 = if join { nodes as u32 } else { 0 };
+    const CHUNK: usize = NUMBERED_CHUNK;
+    // The ascending sweep's first number in each chunk of the order.
+    let mut starts = Vec::with_capacity(if join { 0 } else { n.div_ceil(CHUNK) });
+    let mut ids: Vec<u32> = Vec::new();
+    let mut backwards: Vec<u32> = Vec::with_capacity(if join { CHUNK } else { 0 });
+    // As in [`sweep`].
+    const AHEAD: usize = 12;
+    const WORD_AHEAD: usize = 64;
+    for start in (0..n).step_by(CHUNK) {
+        if start % (1 << 20) == 0 {
+            if report {
+                progress.check(start, n)?;
+            } else if progress.is_cancelled() {
+                return Err(Cancelled);
+            }
+        }
+        if !join {
+            starts.push(next);
+        }
+        let end = (start + CHUNK).min(n);
+        let range = if join { n - end..n - start } else { start..end };
+        let seq = order.read(range, &mut ids);
+        let seq = if join {
+            backwards.clear();
+            backwards.extend(seq.iter().rev());
+            &backwards[..]
+        } else {
+            seq
+        };
+        let m = seq.len();
+        for i in 0..m {
+            let v = seq[i];
+            if i + AHEAD < m {
+                let w = seq[i + AHEAD];
+                let cw = words[w as usize] as u8;
+                if is_candidate(cw) {
+                    mesh.prefetch_star(w, words);
+                } else {
+                    let c = if join { cw & 0xf } else { cw >> 4 };
+                    prefetch(words, mesh.neighbour_at(w, c) as usize);
+                }
+                if i + WORD_AHEAD < m {
+                    prefetch(words, seq[i + WORD_AHEAD] as usize);
+                }
+            }
+            let full = words[v as usize] as u8;
+            let code = if join { full & 0xf } else { full >> 4 };
+            if !is_candidate(full) {
+                let u = mesh.neighbour_at(v, code);
+                let r = find(uf, words[u as usize] & !CANDIDATE);
+                let last = uf[r as usize] & !ROOT;
+                // The last candidate's own number: it is not absorbed yet.
+                words[v as usize] = words[last as usize] & !CANDIDATE;
+                continue;
+            }
+            let kid = if join {
+                next -= 1;
+                next
+            } else {
+                next += 1;
+                next - 1
+            };
+            words[v as usize] = CANDIDATE | kid;
+            let mut root = kid;
+            uf[kid as usize] = ROOT | v;
+            reps.clear();
+            let swept = |u: u32| {
+                if join {
+                    values.above(u, v)
+                } else {
+                    values.above(v, u)
+                }
+            };
+            match code {
+                LINK_EMPTY => {}
+                LINK_SEVERAL => mesh.for_each_link_component(v, swept, |u| reps.push(u)),
+                index => reps.push(mesh.neighbour_at(v, index)),
+            }
+            for &u in &reps {
+                let r = find(uf, words[u as usize] & !CANDIDATE);
+                if r == root {
+                    continue;
+                }
+                // Component r is absorbed at v: its last candidate's parent.
+                let last = uf[r as usize] & !ROOT;
+                words[last as usize] = CANDIDATE | kid;
+                root = union_naming(uf, root, r, kid, v, (root > r) == join);
+            }
+        }
+    }
+    debug_assert_eq!(next, if join { 0 } else { nodes as u32 });
+    Ok(starts)
+}
+
+/// The chunks of the order whose first candidate numbers
+/// [`sweep_parents_in_words`] lists for [`number_candidates`].
+const NUMBERED_CHUNK: usize = 1 << 16;
+
+/// After both [`sweep_parents_in_words`]: each candidate's parent in the
+/// join and in the split tree, read off its two words (`NONE` where a word
+/// names the candidate itself: the root), and its own number written back
+/// into both, as [`sweep`] leaves them. A candidate's number is its rank in
+/// the order: each chunk of the order is numbered from the first number
+/// the split sweep gave in it (`starts`), all chunks at once.
+pub(super) fn number_candidates(
+    order: OrderView<'_>,
+    join: &mut [u32],
+    split: &mut [u32],
+    starts: &[u32],
+    nodes: usize,
+) -> (Vec<u32>, Vec<u32>) {
+    let n = order.len();
+    let mut join_parent = crate::pages::filled(nodes, NONE);
+    let mut split_parent = crate::pages::filled(nodes, NONE);
+    let slots = [join, split].map(crate::pages::DisjointSlots::new);
+    let parents = [join_parent.as_mut_slice(), split_parent.as_mut_slice()]
+        .map(crate::pages::DisjointSlots::new);
+    starts
+        .par_iter()
+        .enumerate()
+        .for_each_init(Vec::new, |ids, (c, &first)| {
+            let range = c * NUMBERED_CHUNK..(n.min((c + 1) * NUMBERED_CHUNK));
+            let seq = order.read(range, ids);
+            let mut number = first;
+            for (i, &x) in seq.iter().enumerate() {
+                if let Some(&y) = seq.get(i + 16) {
+                    slots.iter().for_each(|w| w.prefetch(y as usize));
+                }
+                // SAFETY: a vertex is in the order once, so its words are
+                // read and written by this chunk alone, as is the slot of
+                // the number it is given.
+                unsafe {
+                    if slots[0].read(x as usize) & CANDIDATE == 0 {
+                        continue;
+                    }
+                    for (w, p) in slots.iter().zip(&parents) {
+                        let named = w.read(x as usize) & !CANDIDATE;
+                        p.write(number as usize, if named == number { NONE } else { named });
+                        w.write(x as usize, CANDIDATE | number);
+                    }
+                }
+                number += 1;
+            }
+        });
+    (join_parent, split_parent)
+}
+
+/// [`SweepTree`] of a tree whose parents [`number_candidates`] read.
+pub(super) fn tree_of_parents(parent: Vec<u32>, words: Vec<u32>) -> SweepTree {
+    SweepTree {
+        children: count_children(&parent),
+        parent,
+        leafward: Leafward::Words(words),
+        vertex: Vec::new(),
+    }
 }
 
 /// Words by which a sweep's union-find starts into its allocation: 65
@@ -573,13 +781,27 @@ const UF_SHIFT: usize = 1040;
 /// components.
 #[inline(always)]
 pub(super) fn union<U: Word>(uf: &mut [U], root: u32, r: u32, kid: u32, root_stays: bool) -> u32 {
+    union_naming(uf, root, r, kid, kid, root_stays)
+}
+
+/// [`union`] whose new root's word names `last` (a vertex, in
+/// [`sweep_parents_in_words`]) rather than `kid`.
+#[inline(always)]
+fn union_naming<U: Word>(
+    uf: &mut [U],
+    root: u32,
+    r: u32,
+    kid: u32,
+    last: u32,
+    root_stays: bool,
+) -> u32 {
     let (hi, lo) = if root != kid && root_stays {
         (root, r)
     } else {
         (r, root)
     };
     uf[lo as usize] = U::of(hi);
-    uf[hi as usize] = U::of(ROOT | kid);
+    uf[hi as usize] = U::of(ROOT | last);
     hi
 }
 
