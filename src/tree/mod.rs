@@ -326,13 +326,13 @@ fn tree_bytes(candidates: usize) -> u64 {
 /// What the candidates' tables hold at the merge's peak: the merge's
 /// ([`merge_bytes`]) on every candidate, or, where the candidates regular
 /// in both trees are reduced first ([`merge::reduce_regular_candidates`]),
-/// the larger of the reduction's 14 per candidate and 8 per supernode and
+/// the larger of the reduction's 10 per candidate and 9 per supernode and
 /// the merge's on the supernodes alone.
 fn merge_table_bytes(n: usize, candidates: usize, supernodes: usize) -> u64 {
     let (k, s) = (candidates as u64, supernodes as u64);
     let packed = packs_tables(n, candidates);
     if merge::reduces(n, candidates, supernodes, merge::REDUCED_SHARE) {
-        (14 * k + 8 * s).max(merge_bytes(packed, supernodes, supernodes))
+        (10 * k + 9 * s).max(merge_bytes(packed, supernodes, supernodes))
     } else {
         merge_bytes(packed, candidates, supernodes)
     }
@@ -367,10 +367,18 @@ fn packs_tables(n: usize, candidates: usize) -> bool {
 
 /// What a candidate node costs while both sweeps run: per sweep its
 /// union-find entry (3 bytes where the tables pack, else 4) and its
-/// parent ([`sweep`]; the children counts and the candidates' vertices
-/// come once the union-finds are let go).
+/// parent ([`sweep`]; the children counts come once the union-finds are
+/// let go). Where the records are words, each candidate's parent is
+/// written into its record ([`sweep::parents_in_words`]): the union-finds'
+/// 8 while sweeping, then both trees' parents and children, 10.
 fn sweep_bytes_per_candidate(n: usize, candidates: usize) -> u64 {
-    if packs_tables(n, candidates) { 14 } else { 16 }
+    if packs_tables(n, candidates) {
+        14
+    } else if sweep::parents_in_words(n, candidates, None) {
+        10
+    } else {
+        16
+    }
 }
 
 /// What a node of the blocks (a candidate or a band vertex) costs beyond
@@ -472,8 +480,9 @@ pub fn check_memory(
 /// [`check_memory`] again once the sweeps are done and the `supernodes`
 /// are known: what is left to build (the merge and the grouping) against
 /// what is `available` now plus what the build holds already (the order
-/// unless it is let go, the records, and 14 bytes per candidate: both
-/// trees' parents and child counts, and the candidates' vertices).
+/// unless it is let go, the records, and 10 bytes per candidate: both
+/// trees' parents and child counts; the candidates' vertices are read off
+/// the split tree's record later).
 pub fn check_merge_memory(
     n: usize,
     candidates: usize,
@@ -486,7 +495,7 @@ pub fn check_merge_memory(
     let kept = if order_remade { 0 } else { order_bytes };
     let merge = records + merge_table_bytes(n, candidates, supernodes) + kept;
     let needed = merge.max(order_bytes + tree_bytes(candidates) * n as u64);
-    let held = order_bytes + records + 14 * candidates as u64;
+    let held = order_bytes + records + 10 * candidates as u64;
     refuse_beyond(n, candidates, needed, available.saturating_add(held))
 }
 
@@ -974,15 +983,16 @@ mod tests {
         // A scan or smooth field (2 % candidates): 10.9 bytes per vertex.
         assert!(check_memory(n, n / 50, order, false, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates, half of them supernodes,
-        // so the other 14 % are reduced before the merge): the sweeps'
-        // 14.48 bytes per vertex fit on a 24 GiB machine with the order let
-        // go and remade (4.48 GiB left beside the 10 already held), not
-        // with 4.47; held through the merge, the merge's 16.3 (its tables
+        // so the other 14 % are reduced before the merge): the sweeps hold
+        // 12.8 bytes per vertex (each candidate's parent in its record: 10
+        // per candidate), the merge on the supernodes 14.3 with the order
+        // let go and remade (4.3 GiB left beside the 10 already held), not
+        // with 4.29; held through the merge, the merge's 16.3 (its tables
         // in 4 bytes per number: over 2^24 candidates) need 6.3.
         let noisy = n * 28 / 100;
         assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, order, true, 4490 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, true, 4470 * (gib / 1000)).is_err());
+        assert!(check_memory(n, noisy, order, true, 4310 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, true, 4290 * (gib / 1000)).is_err());
         assert!(check_memory(n, noisy, order, false, 6310 * (gib / 1000)).is_ok());
         assert!(check_memory(n, noisy, order, false, 6290 * (gib / 1000)).is_err());
         let e = check_memory(n, noisy, order, false, 6 * gib).expect_err("refused");
@@ -998,19 +1008,19 @@ mod tests {
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
-        assert!(message.contains("16 bytes in the sweeps"), "{message}");
+        assert!(message.contains("10 bytes in the sweeps"), "{message}");
         assert!(message.contains("about 37 at the merge"), "{message}");
         // Once the sweeps tell the supernodes: 8 % (the noisy 1024³ scan
         // of the README) are reduced to and the merge needs no more than
-        // the sweeps held; 20 % are not, and the merge on all candidates
-        // needs 19.4 bytes per vertex, 5.48 GiB beyond the 13.92 held.
+        // the sweeps held (11.6 bytes per vertex); 20 % are not, and the
+        // merge on all candidates needs 19.4, 6.6 GiB beyond the 12.8 held.
         let (few, many) = (n * 8 / 100, n * 20 / 100);
         assert!(check_merge_memory(n, noisy, few, order, true, 0).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 5490 * (gib / 1000)).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 5470 * (gib / 1000)).is_err());
+        assert!(check_merge_memory(n, noisy, many, order, true, 6610 * (gib / 1000)).is_ok());
+        assert!(check_merge_memory(n, noisy, many, order, true, 6590 * (gib / 1000)).is_err());
         // Held through the merge, the order needs its 2 more.
-        assert!(check_merge_memory(n, noisy, many, order, false, 7470 * (gib / 1000)).is_err());
-        assert!(check_merge_memory(n, noisy, many, order, false, 7490 * (gib / 1000)).is_ok());
+        assert!(check_merge_memory(n, noisy, many, order, false, 8590 * (gib / 1000)).is_err());
+        assert!(check_merge_memory(n, noisy, many, order, false, 8610 * (gib / 1000)).is_ok());
         // Fewer than 2^24 candidates: the tables in 3 bytes per number,
         // 30 bytes per candidate where half are supernodes.
         assert_eq!(merge_bytes_per_candidate(1 << 22, 1 << 20), 30);
