@@ -35,11 +35,15 @@
 //! where half the vertices are candidates. There about half the
 //! candidates are regular in both trees and are reduced before the merge
 //! ([`merge::reduce_regular_candidates`]): the merge then holds about 45
-//! bytes per supernode, and the reduction 14 per candidate and 8 per
+//! bytes per supernode, and the reduction 10 per candidate and 9 per
 //! supernode. Where at least one vertex in 8 is a candidate and the
 //! records pack, the candidates' own tables are packed too
 //! ([`leafward::packs_tables`]): 14 bytes per candidate in the sweeps and
-//! about 30 at the merge (37.5 per supernode where it is reduced).
+//! about 30 at the merge (37.5 per supernode where it is reduced). Where
+//! the records cannot pack (2^23 candidates or more: a noisy scan of a
+//! billion vertices, white noise), the sweeps write each candidate's
+//! parent into its record ([`sweep::sweep_parents_in_words`]): 8 bytes per
+//! candidate while sweeping and 10 once the parents are read off, not 16.
 //! So when the order is cheap to
 //! make again (8- and 16-bit values: a counting sort in O(n), most scans)
 //! and the candidates are many, [`ContourTree::from_field`] lets the order
@@ -68,7 +72,11 @@
 //! after the placement and packing a noisy scan's tables (session 39)
 //! took tooth from 12.1-12.4 to 11.1-11.9 (its sweeps at 11.5 are the
 //! peak, the finished tree's 11.15 just below) and engine from 9.7 to
-//! 9.5-9.6.
+//! 9.5-9.6. The parents in the records and the reduction over the old
+//! parents (session 40) took the noisy 1024³ scan from 13.2 to 11.6 (its
+//! sweeps and its reduction now at 11.6-11.7, the merge 11.0) and white
+//! noise from 21.3-21.6 to 20.5-20.7 (its merge on the supernodes, in
+//! words, is its peak).
 
 pub mod blocks;
 pub mod json;

@@ -47,7 +47,11 @@
 //! are then 3 bytes, as the records' are. Once the
 //! union-find is let go, each candidate's children are counted (1 byte),
 //! and once both sweeps are done the split tree's list of the candidates'
-//! vertices (4 bytes each) is read off its words.
+//! vertices (4 bytes each) is read off its words. Where the words cannot
+//! pack (2^23 candidates or more), each candidate's parent is written into
+//! its own word instead of a table ([`sweep_parents_in_words`]): 4 bytes
+//! per candidate while sweeping, the union-find's, and the parents read
+//! off the words once both sweeps are done ([`number_candidates`]).
 
 use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use crate::field::{OrderView, VertexOrder};
