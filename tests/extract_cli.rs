@@ -282,6 +282,38 @@ fn tree_json_to_stdout_carries_only_the_json_and_the_report_goes_to_stderr() {
     assert!(plain.stdout.contains("superarcs:") && plain.stderr.is_empty());
 }
 
+/// `--json` writes its document element by element (a node or an arc at a
+/// time); it is the document the library makes whole: the tree with its
+/// arcs' Betti numbers, and the collapsed tree.
+#[test]
+fn tree_json_written_element_by_element_is_the_whole_document() {
+    use flexiso::simplify::CollapsedTree;
+    use flexiso::tree::ContourTree;
+    for input in ["synthetic-noisy:10", "synthetic:14"] {
+        let o = flexiso(&["-q", "tree", input, "--json", "-"]);
+        assert!(o.success(), "{}", o.stderr);
+        let mut written: serde_json::Value = serde_json::from_str(&o.stdout).expect("JSON");
+        let volume = flexiso::cli::input::InputArgs::from_input(input)
+            .load()
+            .expect("a synthetic field");
+        let field = volume.field;
+        let (tree, _) =
+            ContourTree::from_field(&field, &flexiso::progress::Progress::new()).expect("tree");
+        let mut whole = flexiso::tree::json::tree_json(&tree, &field);
+        flexiso::measure::betti::ContourTopology::new(&tree, &field).add_to_json(&mut whole);
+        let collapsed = CollapsedTree::new(&tree, &field);
+        whole["collapsed"] = flexiso::simplify::json::collapsed_tree_json(&collapsed, &tree);
+        for node in written["nodes"].as_array_mut().expect("nodes") {
+            assert!(node["position"].is_array());
+            node.as_object_mut().expect("object").remove("position");
+        }
+        assert!(!whole["arcs"].as_array().expect("arcs").is_empty());
+        for key in ["format", "version", "dims", "nodes", "arcs", "collapsed"] {
+            assert_eq!(written[key], whole[key], "{input}: {key}");
+        }
+    }
+}
+
 #[test]
 fn tree_json_carries_the_source_geometry_and_node_positions() {
     let o = flexiso(&["tree", "synthetic:12", "--json", "-"]);

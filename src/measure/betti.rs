@@ -326,22 +326,27 @@ impl ContourTopology {
             return;
         };
         for (a, arc) in arcs.iter_mut().enumerate() {
-            if a + 1 >= self.offsets.len() {
-                break;
-            }
-            let segs = self.segments(ArcId(a as u32));
-            let Some(obj) = arc.as_object_mut() else {
-                continue;
-            };
-            obj.insert("betti".into(), json!(segs[0].betti()));
-            obj.insert("euler".into(), json!(segs[0].euler));
-            if segs.len() > 1 {
-                let list: Vec<Value> = segs
-                    .iter()
-                    .map(|s| json!({"start": s.start, "euler": s.euler, "betti": s.betti()}))
-                    .collect();
-                obj.insert("betti_segments".into(), Value::Array(list));
-            }
+            self.add_to_arc_json(a, arc);
+        }
+    }
+
+    /// [`Self::add_to_json`] for superarc `a`'s object alone.
+    pub fn add_to_arc_json(&self, a: usize, arc: &mut Value) {
+        if a + 1 >= self.offsets.len() {
+            return;
+        }
+        let segs = self.segments(ArcId(a as u32));
+        let Some(obj) = arc.as_object_mut() else {
+            return;
+        };
+        obj.insert("betti".into(), json!(segs[0].betti()));
+        obj.insert("euler".into(), json!(segs[0].euler));
+        if segs.len() > 1 {
+            let list: Vec<Value> = segs
+                .iter()
+                .map(|s| json!({"start": s.start, "euler": s.euler, "betti": s.betti()}))
+                .collect();
+            obj.insert("betti_segments".into(), Value::Array(list));
         }
     }
 }

@@ -31,28 +31,36 @@ fn original_arcs(tree: &ContourTree, chain: &[ArcId]) -> Value {
         .collect()
 }
 
-/// The collapsed tree (zero-height arcs contracted) as JSON.
+/// Node `v` of the collapsed tree as JSON, an element of its `"nodes"`.
+pub fn collapsed_node_json(collapsed: &CollapsedTree, v: u32) -> Value {
+    let (up, down) = collapsed.node_degree(v);
+    json!({
+        "vertex": collapsed.node_vertex(v),
+        "value": collapsed.node_value(v),
+        "up": up,
+        "down": down,
+    })
+}
+
+/// Arc `a` of the collapsed tree as JSON, an element of its `"arcs"`.
+pub fn collapsed_arc_json(collapsed: &CollapsedTree, tree: &ContourTree, a: u32) -> Value {
+    let (u, l) = collapsed.arc(a);
+    json!({
+        "upper": collapsed.node_vertex(u),
+        "lower": collapsed.node_vertex(l),
+        "original_arcs": original_arcs(tree, collapsed.chain(a)),
+    })
+}
+
+/// The collapsed tree (zero-height arcs contracted) as JSON (`flexiso tree
+/// --json` writes the same keys element by element:
+/// [`collapsed_node_json`], [`collapsed_arc_json`]).
 pub fn collapsed_tree_json(collapsed: &CollapsedTree, tree: &ContourTree) -> Value {
     let nodes: Vec<Value> = (0..collapsed.num_nodes() as u32)
-        .map(|v| {
-            let (up, down) = collapsed.node_degree(v);
-            json!({
-                "vertex": collapsed.node_vertex(v),
-                "value": collapsed.node_value(v),
-                "up": up,
-                "down": down,
-            })
-        })
+        .map(|v| collapsed_node_json(collapsed, v))
         .collect();
     let arcs: Vec<Value> = (0..collapsed.num_arcs() as u32)
-        .map(|a| {
-            let (u, l) = collapsed.arc(a);
-            json!({
-                "upper": collapsed.node_vertex(u),
-                "lower": collapsed.node_vertex(l),
-                "original_arcs": original_arcs(tree, collapsed.chain(a)),
-            })
-        })
+        .map(|a| collapsed_arc_json(collapsed, tree, a))
         .collect();
     json!({
         "perturbed_arcs": collapsed.perturbed_arcs(),
