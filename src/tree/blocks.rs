@@ -238,7 +238,8 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
             && cuts.windows(2).all(|w| w[0] < w[1]),
         "cuts run from 0 to n, increasing"
     );
-    if cuts.len() <= 2 && parents_in_words {
+    // A vertex id names a union-find root in the same word as its flag.
+    if cuts.len() <= 2 && parents_in_words && n <= sweep::ROOT as usize {
         let (mut join, mut split) = (join_words.into_words(), split_words.into_words());
         let (j, s) = rayon::join(
             || {

@@ -466,8 +466,8 @@ fn merge_in<I: Id>(
 /// vertices, 15 % supernodes), and every table of the merge that follows
 /// is the supernodes' size: about 40 bytes per supernode at its peak
 /// instead of 40 per candidate. This step holds 10 bytes per candidate and
-/// 8 per supernode: both trees' parents and children, and the supernodes'
-/// vertices and new parents; each tree's old parents become its leafward
+/// 9 per supernode: both trees' parents and children, and the supernodes'
+/// vertices, new parents and children; each tree's old parents become its leafward
 /// supernodes in place ([`reduce_tree`]). It runs when at least one vertex
 /// in `share` is a candidate to reduce ([`REDUCED_SHARE`]: where it lowers
 /// the peak). Takes the supernodes among the candidates (`kept`,
