@@ -109,20 +109,15 @@ impl FlexisoApp {
         let level = level.clone();
         let path = path.to_path_buf();
         Ok(move || {
-            let mut json = crate::tree::json::tree_json(&tree, &field);
-            if let Some(obj) = json.as_object_mut() {
-                obj.insert(
-                    "collapsed".into(),
-                    crate::simplify::json::collapsed_tree_json(&collapsed, &tree),
-                );
-                obj.insert(
-                    "simplified".into(),
-                    crate::simplify::json::simplified_tree_json(&level, &tree),
-                );
+            // Written node by node and arc by arc, beside the file and
+            // moved over it once whole.
+            crate::simplify::json::TreeDocument {
+                collapsed: Some(&collapsed),
+                simplified: Some(crate::simplify::json::simplified_tree_json(&level, &tree)),
+                ..crate::simplify::json::TreeDocument::of(&tree, &field)
             }
-            std::fs::write(&path, serde_json::to_string(&json)?)
-                .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
-            Ok(())
+            .write_file(&path)
+            .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))
         })
     }
 

@@ -250,13 +250,36 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
             simplified
         });
-        let parts = JsonParts {
-            tree: &tree,
-            volume: &volume,
-            space: args.space,
-            topology: crate::measure::betti::ContourTopology::new(&tree, field),
+        let g = field.geometry();
+        let position = |v: u32| serde_json::json!(args.space.position(field, v));
+        let topology = crate::measure::betti::ContourTopology::new(&tree, field);
+        let parts = crate::simplify::json::TreeDocument {
+            position: Some(&position),
+            topology: Some(&topology),
+            more: vec![
+                (
+                    "source",
+                    serde_json::json!({
+                        "file": volume.path.display().to_string(),
+                        "format": volume.format,
+                        "value_type": volume.scalar_type.name(),
+                    }),
+                ),
+                (
+                    "geometry",
+                    serde_json::json!({
+                        "spacing": field.spacing(),
+                        "origin": g.origin,
+                        "direction": g.direction,
+                        "space": g.space.name(),
+                        "positions": args.space.describe(field),
+                    }),
+                ),
+            ],
             collapsed: collapsed.as_ref(),
-            simplified,
+            // Only with the collapsed tree, as before.
+            simplified: simplified.filter(|_| collapsed.is_some()),
+            ..crate::simplify::json::TreeDocument::of(&tree, field)
         };
         if super::is_stdio(path) {
             let mut out = std::io::BufWriter::new(std::io::stdout().lock());
@@ -273,131 +296,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             }
         } else {
-            // Written beside the file and moved over it once whole: a
-            // failed write leaves no half file and the old one in place.
-            let cannot = || format!("{}: cannot write", path.display());
-            let mut partial = path.as_os_str().to_owned();
-            partial.push(format!(".partial-{}", std::process::id()));
-            let partial = PathBuf::from(partial);
-            let written = std::fs::File::create(&partial).and_then(|file| {
-                let mut out = std::io::BufWriter::new(file);
-                parts.write(&mut out)?;
-                out.into_inner().map_err(|e| e.into_error())?.sync_all()
-            });
-            let moved = written.and_then(|_| std::fs::rename(&partial, path));
-            if moved.is_err() {
-                let _ = std::fs::remove_file(&partial);
-            }
-            moved.with_context(cannot)?;
+            parts
+                .write_file(path)
+                .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         bar.done();
     }
     Ok(())
-}
-
-/// What `--json` writes: the tree ([`crate::tree::json`]) with where the
-/// volume came from and sits in the world (`source`: file, format, value
-/// type in the file; `geometry`: spacing, origin, direction rows per axis,
-/// space, and the space of the nodes' positions), a `position` on every
-/// node, the arcs' Betti numbers, and the collapsed and simplified trees
-/// ([`crate::simplify::json`]). Written element by element: a node or an
-/// arc is made, written and dropped, so that the output of millions of
-/// arcs takes no more memory than one (a whole JSON document of white
-/// noise's 3.9 M superarcs took more than this machine's 23 GiB).
-struct JsonParts<'a> {
-    tree: &'a ContourTree,
-    volume: &'a crate::field::io::Volume,
-    space: SpaceArg,
-    topology: crate::measure::betti::ContourTopology,
-    collapsed: Option<&'a CollapsedTree>,
-    simplified: Option<serde_json::Value>,
-}
-
-impl JsonParts<'_> {
-    /// The JSON object, in its keys' order: `format`, `version`, `dims`,
-    /// `nodes`, `arcs`, `source`, `geometry`, and `collapsed` and
-    /// `simplified` where they were made.
-    fn write(&self, w: &mut impl std::io::Write) -> std::io::Result<()> {
-        use crate::tree::json::{arc_json, node_json};
-        use serde_json::json;
-        let (tree, field) = (self.tree, &self.volume.field);
-        let g = field.geometry();
-        w.write_all(br#"{"format":"flexiso-contour-tree","version":1,"dims":"#)?;
-        write_json(w, &json!(field.dims()))?;
-        w.write_all(br#","nodes":"#)?;
-        write_array(w, tree.nodes().len(), |i| {
-            let mut node = node_json(tree, field, i);
-            let v = tree.nodes()[i].vertex;
-            node["position"] = json!(self.space.position(field, v));
-            node
-        })?;
-        w.write_all(br#","arcs":"#)?;
-        write_array(w, tree.arcs().len(), |a| {
-            let mut arc = arc_json(tree, a);
-            self.topology.add_to_arc_json(a, &mut arc);
-            arc
-        })?;
-        w.write_all(br#","source":"#)?;
-        write_json(
-            w,
-            &json!({
-                "file": self.volume.path.display().to_string(),
-                "format": self.volume.format,
-                "value_type": self.volume.scalar_type.name(),
-            }),
-        )?;
-        w.write_all(br#","geometry":"#)?;
-        write_json(
-            w,
-            &json!({
-                "spacing": field.spacing(),
-                "origin": g.origin,
-                "direction": g.direction,
-                "space": g.space.name(),
-                "positions": self.space.describe(field),
-            }),
-        )?;
-        if let Some(collapsed) = self.collapsed {
-            use crate::simplify::json::{collapsed_arc_json, collapsed_node_json};
-            w.write_all(br#","collapsed":{"perturbed_arcs":"#)?;
-            write_json(w, &json!(collapsed.perturbed_arcs()))?;
-            w.write_all(br#","nodes":"#)?;
-            write_array(w, collapsed.num_nodes(), |v| {
-                collapsed_node_json(collapsed, v as u32)
-            })?;
-            w.write_all(br#","arcs":"#)?;
-            write_array(w, collapsed.num_arcs(), |a| {
-                collapsed_arc_json(collapsed, tree, a as u32)
-            })?;
-            w.write_all(b"}")?;
-            if let Some(simplified) = &self.simplified {
-                w.write_all(br#","simplified":"#)?;
-                write_json(w, simplified)?;
-            }
-        }
-        w.write_all(b"}")
-    }
-}
-
-/// A JSON array of `len` elements, each made by `element` and written
-/// before the next is made.
-fn write_array<W: std::io::Write>(
-    w: &mut W,
-    len: usize,
-    element: impl Fn(usize) -> serde_json::Value,
-) -> std::io::Result<()> {
-    w.write_all(b"[")?;
-    for i in 0..len {
-        if i > 0 {
-            w.write_all(b",")?;
-        }
-        write_json(w, &element(i))?;
-    }
-    w.write_all(b"]")
-}
-
-fn write_json<W: std::io::Write>(w: &mut W, value: &serde_json::Value) -> std::io::Result<()> {
-    serde_json::to_writer(w, value).map_err(std::io::Error::from)
 }
 
 /// The stage times of either engine.
