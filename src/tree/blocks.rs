@@ -124,7 +124,7 @@
 use super::leafward::{self, Leafward, Word, with_both_words, with_words};
 use super::sweep::{
     self, Block, BlockTree, CANDIDATE, JoinTree, LinkWords, NONE, ROOT, SplitTree, SweepTree, find,
-    link_rank, union,
+    link_rank, next_node, union,
 };
 use crate::field::{OrderView, VertexOrder};
 use crate::mesh::Mesh;
@@ -648,13 +648,7 @@ impl<O: VertexOrder + ?Sized> Gluing<'_, O> {
                 child = sibling[child as usize];
             }
             reps.extend(across.iter().map(|&(_, w)| w));
-            let kid = if join {
-                next -= 1;
-                next
-            } else {
-                next += 1;
-                next - 1
-            };
+            let kid = next_node(&mut next, join);
             let mut root = g;
             let mut merged = 0u8;
             for &x in &reps {

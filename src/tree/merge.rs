@@ -558,25 +558,11 @@ fn reduce_tree(parent: &mut [u32], kept: &Supernodes) -> Vec<u32> {
 }
 
 /// The vertices of the supernodes among the candidates, in their order,
-/// read off a sweep's words (`CANDIDATE | c` at candidate `c`'s vertex),
-/// on every core.
+/// read off a sweep's words.
 fn supernode_vertices<W: Word>(words: &[W], kept: &Supernodes) -> Vec<u32> {
-    let mut vertex = crate::pages::filled(kept.count(), 0u32);
-    let out = crate::pages::DisjointSlots::new(&mut vertex);
-    words
-        .par_chunks(1 << 16)
-        .enumerate()
-        .for_each(|(i, chunk)| {
-            let first = (i << 16) as u32;
-            for (j, &w) in chunk.iter().enumerate() {
-                let w = w.get();
-                if w & CANDIDATE != 0 && kept.is_node(w & !CANDIDATE) {
-                    // SAFETY: each supernode is at exactly one vertex.
-                    unsafe { out.write(kept.node(w & !CANDIDATE) as usize, first + j as u32) };
-                }
-            }
-        });
-    vertex
+    super::sweep::listed_vertices(words, kept.count(), |c| {
+        kept.is_node(c).then(|| kept.node(c))
+    })
 }
 
 /// How a build sweeps and merges: whether its sweeps write the candidates'

@@ -253,7 +253,19 @@ impl SweepTree {
 /// The vertex of each of the `candidates` candidates from a sweep's words
 /// (`CANDIDATE | c` at candidate `c`'s vertex), on every core.
 pub(super) fn candidate_vertices<W: Word>(words: &[W], candidates: usize) -> Vec<u32> {
-    let mut vertex = crate::pages::filled(candidates, 0u32);
+    listed_vertices(words, candidates, Some)
+}
+
+/// The vertices of `len` of the candidates, read off a sweep's words
+/// (`CANDIDATE | c` at candidate `c`'s vertex), on every core: candidate
+/// `c`'s vertex goes to slot `slot(c)`, where it has one (a slot is no
+/// other candidate's).
+pub(super) fn listed_vertices<W: Word>(
+    words: &[W],
+    len: usize,
+    slot: impl Fn(u32) -> Option<u32> + Sync,
+) -> Vec<u32> {
+    let mut vertex = crate::pages::filled(len, 0u32);
     let out = crate::pages::DisjointSlots::new(&mut vertex);
     words
         .par_chunks(1 << 16)
@@ -262,9 +274,12 @@ pub(super) fn candidate_vertices<W: Word>(words: &[W], candidates: usize) -> Vec
             let first = (c << 16) as u32;
             for (i, &w) in chunk.iter().enumerate() {
                 let w = w.get();
-                if w & CANDIDATE != 0 {
-                    // SAFETY: each candidate number is in exactly one word.
-                    unsafe { out.write((w & !CANDIDATE) as usize, first + i as u32) };
+                if w & CANDIDATE != 0
+                    && let Some(s) = slot(w & !CANDIDATE)
+                {
+                    // SAFETY: each candidate number is in exactly one
+                    // word, and its slot is no other candidate's.
+                    unsafe { out.write(s as usize, first + i as u32) };
                 }
             }
         });
@@ -483,13 +498,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, U: Word, const BL
                 leafward[(v - lo) as usize] = W::of(uf[r as usize].get() & !ROOT);
                 continue;
             }
-            let kid = if join {
-                next -= 1;
-                next
-            } else {
-                next += 1;
-                next - 1
-            };
+            let kid = next_node(&mut next, join);
             leafward[(v - lo) as usize] = W::of(CANDIDATE | kid);
             if keep_vertex {
                 vertex[kid as usize] = v;
@@ -516,11 +525,7 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, U: Word, const BL
                     }
                 });
             } else {
-                match code {
-                    LINK_EMPTY => {}
-                    LINK_SEVERAL => mesh.for_each_link_component(v, swept, |u| reps.push(u)),
-                    index => reps.push(mesh.neighbour_at(v, index)),
-                }
+                swept_link_components(mesh, v, code, swept, &mut reps);
             }
             for &u in &reps {
                 let r = find(uf, leafward[(u - lo) as usize].get() & !CANDIDATE);
@@ -547,6 +552,38 @@ pub(super) fn sweep<M: Mesh, O: VertexOrder + ?Sized, W: Word, U: Word, const BL
         vertex,
         candidate,
     })
+}
+
+/// The number of the next node a sweep visits, from the top down for the
+/// join tree (`next` counts down to it) and from the bottom up for the
+/// split tree (`next` counts past it): nodes are numbered in the order.
+#[inline(always)]
+pub(super) fn next_node(next: &mut u32, join: bool) -> u32 {
+    if join {
+        *next -= 1;
+        *next
+    } else {
+        *next += 1;
+        *next - 1
+    }
+}
+
+/// One representative per component of the swept part of `v`'s link,
+/// pushed onto `reps`, from `v`'s half of its link code: none where it is
+/// empty, one neighbour where it is one piece, else each piece's.
+#[inline(always)]
+fn swept_link_components<M: Mesh>(
+    mesh: &M,
+    v: u32,
+    code: u8,
+    swept: impl FnMut(u32) -> bool,
+    reps: &mut Vec<u32>,
+) {
+    match code {
+        LINK_EMPTY => {}
+        LINK_SEVERAL => mesh.for_each_link_component(v, swept, |u| reps.push(u)),
+        index => reps.push(mesh.neighbour_at(v, index)),
+    }
 }
 
 /// Each node's children, from the nodes' parents.
@@ -660,13 +697,7 @@ pub(super) fn sweep_parents_in_words<M: Mesh, O: VertexOrder + ?Sized>(
                 words[v as usize] = words[last as usize] & !CANDIDATE;
                 continue;
             }
-            let kid = if join {
-                next -= 1;
-                next
-            } else {
-                next += 1;
-                next - 1
-            };
+            let kid = next_node(&mut next, join);
             words[v as usize] = CANDIDATE | kid;
             let mut root = kid;
             uf[kid as usize] = ROOT | v;
@@ -678,11 +709,7 @@ pub(super) fn sweep_parents_in_words<M: Mesh, O: VertexOrder + ?Sized>(
                     values.above(v, u)
                 }
             };
-            match code {
-                LINK_EMPTY => {}
-                LINK_SEVERAL => mesh.for_each_link_component(v, swept, |u| reps.push(u)),
-                index => reps.push(mesh.neighbour_at(v, index)),
-            }
+            swept_link_components(mesh, v, code, swept, &mut reps);
             for &u in &reps {
                 let r = find(uf, words[u as usize] & !CANDIDATE);
                 if r == root {
