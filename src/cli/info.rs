@@ -192,7 +192,7 @@ fn tree_memory(f: &ScalarField) -> (usize, usize, u64) {
     let n = f.len();
     let candidates = crate::with_values!(f.values(), v => crate::tree::sweep::count_candidates_of(&mesh, v.as_slice()));
     let counting = crate::field::sorts_by_counting(f.values());
-    let remade = crate::tree::remakes_order(n, candidates, counting);
+    let remade = crate::tree::order_at_merge(n, candidates, counting);
     let order_bytes = crate::field::order_bytes(f.values());
     let span = mesh.edge_span();
     let blocks = blocks::chosen_blocks(n, span, candidates);

@@ -49,8 +49,10 @@
 //! and the candidates are many, [`ContourTree::from_field`] lets the order
 //! go before the merge and sorts again after the placement, once the
 //! second leafward record and the candidates' tables are gone
-//! ([`remakes_order`]); the order goes again before the tree's node
-//! adjacency is made. Measured peaks (`flexiso bench`, session 26): about
+//! ([`order_at_merge`]); the order goes again before the tree's node
+//! adjacency is made. A float order, which costs a sort of (value, id)
+//! pairs to make again, is let go likewise where that takes at least a
+//! byte per vertex off the peak: noisy float fields, not smooth ones. Measured peaks (`flexiso bench`, session 26): about
 //! 10 bytes per vertex on the 8-bit brains (7 % candidates; the grouping),
 //! 10.5 on a smooth float field (12.1 before the float sort, the placement
 //! and the grouping gave memory back as they went). With the reduction
@@ -76,7 +78,11 @@
 //! parents (session 40) took the noisy 1024³ scan from 13.2 to 11.6 (its
 //! sweeps and its reduction now at 11.6-11.7, the merge 11.0) and white
 //! noise from 21.3-21.6 to 20.5-20.7 (its merge on the supernodes, in
-//! words, is its peak).
+//! words, is its peak). Letting white noise's float order go during the
+//! merge and sorting it again (session 41) took it to 17.6 (its sweeps,
+//! 4 bytes of order, 8 of records and 10 per candidate, are the peak now,
+//! the grouping 17.2 just below it), for a second float sort: 0.26 s of
+//! 6.3-7.2 on this machine.
 
 pub mod blocks;
 pub mod json;
@@ -265,16 +271,19 @@ impl From<Cancelled> for BuildError {
 /// of the candidates are supernodes: half of them, as on every scan
 /// measured (44-50 %; [`check_merge_memory`] checks again with the real
 /// number). The order, the two sweeps' records and 16 per candidate while
-/// sweeping; then the order unless it is let go (`order_remade`, see
-/// [`remakes_order`]) and, at the merge, the records and the candidates'
+/// sweeping; then the order unless it is let go (`order`, see
+/// [`order_at_merge`]) and, at the merge, the records and the candidates'
 /// tables ([`merge_table_bytes`]); at the grouping the order (made again if
 /// it was let go), `vertex_arc` and the arcs' vertex lists
 /// ([`tree_bytes`]). The records take 8 bytes per vertex, or 6 with fewer
 /// than 2^23 candidates ([`leafward`]: 3 bytes each from the link pass
 /// on; the placement writes `vertex_arc` over the first in its 3 bytes
-/// and gives the second back).
-pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order_remade: bool) -> u64 {
-    peak_bytes_of(n, candidates, candidates / 2, order_bytes, order_remade)
+/// and gives the second back). Where the order is made again by the
+/// float sort ([`OrderAtMerge::Sorted`]), that sort's (value, id) pairs
+/// (twice the order's bytes) beside the first record's places and the
+/// placed tree's supernodes ([`PLACED_BYTES_PER_SUPERNODE`]).
+pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order: OrderAtMerge) -> u64 {
+    peak_bytes_of(n, candidates, candidates / 2, order_bytes, order)
 }
 
 /// [`peak_bytes`] for a build whose join and split trees are swept in
@@ -289,11 +298,11 @@ pub fn peak_bytes_in_blocks(
     n: usize,
     candidates: usize,
     order_bytes: u64,
-    order_remade: bool,
+    order: OrderAtMerge,
     band: usize,
     available: Option<u64>,
 ) -> (u64, bool) {
-    let whole = peak_bytes(n, candidates, order_bytes, order_remade);
+    let whole = peak_bytes(n, candidates, order_bytes, order);
     let held = order_bytes + records_bytes(candidates) * n as u64;
     if band > 0 && glue_fits(candidates, band, held, available) {
         let glue = held.saturating_add(glue_bytes(candidates, band));
@@ -309,16 +318,51 @@ fn peak_bytes_of(
     candidates: usize,
     supernodes: usize,
     order_bytes: u64,
-    order_remade: bool,
+    order: OrderAtMerge,
 ) -> u64 {
     let records = records_bytes(candidates) * n as u64;
     let sweeps =
         order_bytes + records + sweep_bytes_per_candidate(n, candidates) * candidates as u64;
-    let merge = records + merge_table_bytes(n, candidates, supernodes);
-    let held = if order_remade { 0 } else { order_bytes };
-    let grouping = order_bytes + tree_bytes(candidates) * n as u64;
-    sweeps.max(merge + held).max(grouping)
+    sweeps.max(after_sweeps_bytes(
+        n,
+        candidates,
+        supernodes,
+        order_bytes,
+        order,
+    ))
 }
+
+/// What the build holds at its peak after the sweeps: the merge (beside
+/// the order where it is kept), the grouping, and the float sort that
+/// makes the order again ([`OrderAtMerge::Sorted`]).
+fn after_sweeps_bytes(
+    n: usize,
+    candidates: usize,
+    supernodes: usize,
+    order_bytes: u64,
+    order: OrderAtMerge,
+) -> u64 {
+    let records = records_bytes(candidates) * n as u64;
+    let merge = records + merge_table_bytes(n, candidates, supernodes);
+    let held = if order == OrderAtMerge::Kept {
+        order_bytes
+    } else {
+        0
+    };
+    let grouping = order_bytes + tree_bytes(candidates) * n as u64;
+    let sort = if order == OrderAtMerge::Sorted {
+        let places = records_bytes(candidates) / 2 * n as u64;
+        2 * order_bytes + places + PLACED_BYTES_PER_SUPERNODE * supernodes as u64
+    } else {
+        0
+    };
+    (merge + held).max(grouping).max(sort)
+}
+
+/// What the placed tree holds per supernode while the order is made again
+/// after the placement (its nodes, superarcs and their ends): 17.2
+/// measured on white noise (`synthetic-noisy:256`, 3.9 M supernodes).
+const PLACED_BYTES_PER_SUPERNODE: u64 = 18;
 
 /// The two records' bytes per vertex: 6 packed, else 8 ([`leafward`]).
 fn records_bytes(candidates: usize) -> u64 {
@@ -437,27 +481,68 @@ fn cuts_that_fit<'a>(
     }
 }
 
-/// True when a build lets the vertex order go during the merge and sorts
-/// again after it: the order is a counting sort (`counting`: 8- and
-/// 16-bit values, O(n)) and the merge, without the order, would still be
-/// above the grouping ([`peak_bytes`]), so that some of the order's cost
-/// comes off the peak. With packed records ([`leafward`]) that takes the
+/// What becomes of the vertex order while the tree is merged: neither
+/// the reduction, the merge nor the placement reads it, so a build that
+/// can make it again lets it go before them and sorts again before the
+/// grouping ([`order_at_merge`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OrderAtMerge {
+    /// Held from the sort to the grouping.
+    Kept,
+    /// Let go and made again by a counting sort (8- and 16-bit values,
+    /// O(n)).
+    Counted,
+    /// Let go and made again by the float sort (32-bit keys: a radix sort
+    /// of (key, id) pairs, 8 bytes per vertex while it runs; 64-bit: a
+    /// comparison sort of the ids).
+    Sorted,
+}
+
+/// Whether a build lets the vertex order go during the merge, and how it
+/// makes it again. Where the order is a counting sort (`counting`: 8- and
+/// 16-bit values, O(n)), wherever the merge, without the order, would
+/// still be above the grouping ([`peak_bytes`]), so that some of the
+/// order's cost comes off the peak. With packed records ([`leafward`])
+/// that takes the
 /// merge's tables above a byte per vertex (the merge's 6 bytes per vertex
 /// and its tables above the grouping's 7): more than 1/37.5 of the
 /// vertices as candidates, with half of them supernodes ([`merge_bytes`];
 /// 1/44 before session 39, 1/22 while the grouping held 8, before session
 /// 38). Otherwise (8 bytes per vertex in the records and
 /// in the grouping) where they are above 2/3 of a byte per vertex: the
-/// merge is then the peak by that much, worth a counting sort. Volumes of
-/// fewer than [`REMAKE_MIN_VERTICES`] keep their order.
-pub fn remakes_order(n: usize, candidates: usize, counting: bool) -> bool {
+/// merge is then the peak by that much, worth a counting sort. A float
+/// sort costs more (on white noise, `synthetic-noisy:256`, about as much
+/// as the link pass): it is made again where that takes at least a byte
+/// per vertex off the peak, the float sort's own pairs counted. That is
+/// a noisy float field: white noise's merge held its 4-byte order beside
+/// the records and about 45 bytes per supernode (23 % of the vertices).
+/// Smooth fields keep it. Volumes of fewer than [`REMAKE_MIN_VERTICES`]
+/// keep their order.
+pub fn order_at_merge(n: usize, candidates: usize, counting: bool) -> OrderAtMerge {
+    if n < REMAKE_MIN_VERTICES {
+        return OrderAtMerge::Kept;
+    }
+    if !counting {
+        let order_bytes = 4 * n as u64;
+        let kept = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Kept);
+        let sorted = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Sorted);
+        return if sorted + n as u64 <= kept {
+            OrderAtMerge::Sorted
+        } else {
+            OrderAtMerge::Kept
+        };
+    }
     let tables = merge_bytes(packs_tables(n, candidates), candidates, candidates / 2);
     let above = if leafward::packs(candidates) {
         tables > n as u64
     } else {
         3 * tables > 2 * n as u64
     };
-    counting && n >= REMAKE_MIN_VERTICES && above
+    if above {
+        OrderAtMerge::Counted
+    } else {
+        OrderAtMerge::Kept
+    }
 }
 
 /// Below this many vertices an order let go does not lower the peak: its
@@ -477,10 +562,10 @@ pub fn check_memory(
     n: usize,
     candidates: usize,
     order_bytes: u64,
-    order_remade: bool,
+    order: OrderAtMerge,
     available: u64,
 ) -> Result<(), BuildError> {
-    let needed = peak_bytes(n, candidates, order_bytes, order_remade);
+    let needed = peak_bytes(n, candidates, order_bytes, order);
     let held = order_bytes + records_bytes(candidates) * n as u64;
     refuse_beyond(n, candidates, needed, available.saturating_add(held))
 }
@@ -496,13 +581,11 @@ pub fn check_merge_memory(
     candidates: usize,
     supernodes: usize,
     order_bytes: u64,
-    order_remade: bool,
+    order: OrderAtMerge,
     available: u64,
 ) -> Result<(), BuildError> {
     let records = records_bytes(candidates) * n as u64;
-    let kept = if order_remade { 0 } else { order_bytes };
-    let merge = records + merge_table_bytes(n, candidates, supernodes) + kept;
-    let needed = merge.max(order_bytes + tree_bytes(candidates) * n as u64);
+    let needed = after_sweeps_bytes(n, candidates, supernodes, order_bytes, order);
     let held = order_bytes + records + 10 * candidates as u64;
     refuse_beyond(n, candidates, needed, available.saturating_add(held))
 }
@@ -529,8 +612,9 @@ enum OrderSource<'a> {
     /// The caller's, held for the whole build.
     Borrowed(&'a [u32]),
     /// The build's own, with a way to make it again if it may be let go
-    /// during the merge ([`remakes_order`]).
-    Owned(Order, Option<&'a (dyn Fn() -> Order + Sync)>),
+    /// during the merge ([`order_at_merge`]) and whether that way is a
+    /// counting sort.
+    Owned(Order, Option<(&'a (dyn Fn() -> Order + Sync), bool)>),
 }
 
 impl OrderSource<'_> {
@@ -584,7 +668,7 @@ impl ContourTree {
         let cuts = count.map(|b| blocks::even_cuts(field.len(), b));
         let remake = || field.compact_vertex_order();
         let counting = crate::field::sorts_by_counting(field.values());
-        let source = OrderSource::Owned(order, counting.then_some(&remake));
+        let source = OrderSource::Owned(order, Some((&remake, counting)));
         let (tree, mut times) = crate::with_values!(field.values(), v => Self::build_from(&mesh, v.as_slice(), source, cuts.as_deref(), merge::MERGING, progress))?;
         times.sort += sort;
         Ok((tree, times))
@@ -655,16 +739,19 @@ impl ContourTree {
         let candidates = words.candidates;
         times.links = t.elapsed();
         let n = mesh.num_vertices();
-        // An owned order comes with a remake only where it is a counting sort.
-        let remake = match &source {
-            OrderSource::Owned(_, Some(remake)) if remakes_order(n, candidates, true) => {
-                Some(*remake)
+        // An owned order comes with a way to make it again.
+        let (remake, order_plan) = match &source {
+            OrderSource::Owned(_, Some((remake, counting))) => {
+                match order_at_merge(n, candidates, *counting) {
+                    OrderAtMerge::Kept => (None, OrderAtMerge::Kept),
+                    plan => (Some(*remake), plan),
+                }
             }
-            _ => None,
+            _ => (None, OrderAtMerge::Kept),
         };
         let available = crate::field::io::available_memory();
         if let Some(available) = available {
-            check_memory(n, candidates, order_bytes, remake.is_some(), available)?;
+            check_memory(n, candidates, order_bytes, order_plan, available)?;
         }
         let whole = [0, n as u32];
         let span = mesh.edge_span();
@@ -688,8 +775,8 @@ impl ContourTree {
         times.sweeps = t.elapsed();
         let supernodes = merge::Supernodes::of_trees(&join, &split);
         if let Some(available) = crate::field::io::available_memory() {
-            let (s, remade) = (supernodes.count(), remake.is_some());
-            check_merge_memory(n, candidates, s, order_bytes, remade, available)?;
+            let s = supernodes.count();
+            check_merge_memory(n, candidates, s, order_bytes, order_plan, available)?;
         }
         progress.stage("merge");
         let t = Instant::now();
@@ -968,8 +1055,10 @@ mod tests {
     #[test]
     fn blocks_add_their_glue_to_the_peak_where_it_fits() {
         let (n, k, order) = (1_000_000, 300_000, 1_000_000);
-        let whole = peak_bytes(n, k, order, false);
-        let peak = |k, band, available| peak_bytes_in_blocks(n, k, order, false, band, available);
+        let whole = peak_bytes(n, k, order, OrderAtMerge::Kept);
+        let peak = |k, band, available| {
+            peak_bytes_in_blocks(n, k, order, OrderAtMerge::Kept, band, available)
+        };
         assert_eq!(peak(k, 0, None), (whole, false));
         // A third of the vertices candidates: the glue is the peak.
         let glue = order + 6 * n as u64 + glue_bytes(k, 20_000);
@@ -979,7 +1068,7 @@ mod tests {
         // Where it does not fit, the build sweeps in one block.
         assert_eq!(peak(k, 20_000, Some(glue - 1)), (whole, false));
         // Few candidates (a smooth field): the whole sweep's peak stands.
-        let smooth = peak_bytes(n, 100, order, false);
+        let smooth = peak_bytes(n, 100, order, OrderAtMerge::Kept);
         assert_eq!(peak(100, 2_000, None), (smooth, true));
     }
 
@@ -989,7 +1078,7 @@ mod tests {
         let n = 1usize << 30; // 1024^3 uint8: the order packed in at most 2 bytes
         let order = 2 * n as u64;
         // A scan or smooth field (2 % candidates): 10.9 bytes per vertex.
-        assert!(check_memory(n, n / 50, order, false, 12 * gib).is_ok());
+        assert!(check_memory(n, n / 50, order, OrderAtMerge::Kept, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates, half of them supernodes,
         // so the other 14 % are reduced before the merge): the sweeps hold
         // 12.8 bytes per vertex (each candidate's parent in its record: 10
@@ -998,21 +1087,24 @@ mod tests {
         // with 4.29; held through the merge, the merge's 16.3 (its tables
         // in 4 bytes per number: over 2^24 candidates) need 6.3.
         let noisy = n * 28 / 100;
-        assert!(check_memory(n, noisy, order, true, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, order, true, 4310 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, true, 4290 * (gib / 1000)).is_err());
-        assert!(check_memory(n, noisy, order, false, 6310 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, false, 6290 * (gib / 1000)).is_err());
-        let e = check_memory(n, noisy, order, false, 6 * gib).expect_err("refused");
+        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 12 * gib).is_ok());
+        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 4310 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 4290 * (gib / 1000)).is_err());
+        assert!(check_memory(n, noisy, order, OrderAtMerge::Kept, 6310 * (gib / 1000)).is_ok());
+        assert!(check_memory(n, noisy, order, OrderAtMerge::Kept, 6290 * (gib / 1000)).is_err());
+        let e = check_memory(n, noisy, order, OrderAtMerge::Kept, 6 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
         else {
             panic!("refused for memory")
         };
-        assert_eq!(needed, peak_bytes(n, noisy, order, false));
+        assert_eq!(needed, peak_bytes(n, noisy, order, OrderAtMerge::Kept));
         assert_eq!(available, 6 * gib + 10 * n as u64);
-        assert_eq!(needed, peak_bytes_of(n, noisy, noisy / 2, order, false));
+        assert_eq!(
+            needed,
+            peak_bytes_of(n, noisy, noisy / 2, order, OrderAtMerge::Kept)
+        );
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
         assert!(message.contains("candidate nodes"), "{message}");
@@ -1023,12 +1115,52 @@ mod tests {
         // the sweeps held (11.6 bytes per vertex); 20 % are not, and the
         // merge on all candidates needs 19.4, 6.6 GiB beyond the 12.8 held.
         let (few, many) = (n * 8 / 100, n * 20 / 100);
-        assert!(check_merge_memory(n, noisy, few, order, true, 0).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 6610 * (gib / 1000)).is_ok());
-        assert!(check_merge_memory(n, noisy, many, order, true, 6590 * (gib / 1000)).is_err());
+        assert!(check_merge_memory(n, noisy, few, order, OrderAtMerge::Counted, 0).is_ok());
+        assert!(
+            check_merge_memory(
+                n,
+                noisy,
+                many,
+                order,
+                OrderAtMerge::Counted,
+                6610 * (gib / 1000)
+            )
+            .is_ok()
+        );
+        assert!(
+            check_merge_memory(
+                n,
+                noisy,
+                many,
+                order,
+                OrderAtMerge::Counted,
+                6590 * (gib / 1000)
+            )
+            .is_err()
+        );
         // Held through the merge, the order needs its 2 more.
-        assert!(check_merge_memory(n, noisy, many, order, false, 8590 * (gib / 1000)).is_err());
-        assert!(check_merge_memory(n, noisy, many, order, false, 8610 * (gib / 1000)).is_ok());
+        assert!(
+            check_merge_memory(
+                n,
+                noisy,
+                many,
+                order,
+                OrderAtMerge::Kept,
+                8590 * (gib / 1000)
+            )
+            .is_err()
+        );
+        assert!(
+            check_merge_memory(
+                n,
+                noisy,
+                many,
+                order,
+                OrderAtMerge::Kept,
+                8610 * (gib / 1000)
+            )
+            .is_ok()
+        );
         // Fewer than 2^24 candidates: the tables in 3 bytes per number,
         // 30 bytes per candidate where half are supernodes.
         assert_eq!(merge_bytes_per_candidate(1 << 22, 1 << 20), 30);
@@ -1039,50 +1171,105 @@ mod tests {
             let order_bytes = per_vertex * 1000;
             // The order and the packed records, 6 bytes per vertex.
             let held = order_bytes + 6 * 1000;
-            let peak = peak_bytes(1000, 10, order_bytes, false);
-            assert!(check_memory(1000, 10, order_bytes, false, peak - held).is_ok());
-            assert!(check_memory(1000, 10, order_bytes, false, peak - held - 1).is_err());
+            let peak = peak_bytes(1000, 10, order_bytes, OrderAtMerge::Kept);
+            assert!(check_memory(1000, 10, order_bytes, OrderAtMerge::Kept, peak - held).is_ok());
+            assert!(
+                check_memory(1000, 10, order_bytes, OrderAtMerge::Kept, peak - held - 1).is_err()
+            );
         }
     }
 
     #[test]
     fn the_order_is_let_go_only_where_it_lowers_the_peak() {
         let n = REMAKE_MIN_VERTICES;
+        let (kept, counted, sorted) = (
+            OrderAtMerge::Kept,
+            OrderAtMerge::Counted,
+            OrderAtMerge::Sorted,
+        );
+        let remakes_order = |n, k, counting| order_at_merge(n, k, counting) != kept;
         assert!(
             !remakes_order(n - 1, n / 4, true),
             "a small volume keeps it"
         );
-        // Smooth fields and floats keep it; counting sorts with many
+        assert!(!remakes_order(n - 1, n / 2, false));
+        // Smooth fields keep it; counting sorts with many
         // candidates let it go, and the peak drops by up to the order's
         // bytes per vertex. With the records packed (fewer than 2^23
         // candidates, the tables in 4 bytes per number: fewer than 1/8),
         // below 1/37.5 of the vertices the grouping or the sweeps stay the
         // peak.
         assert!(!remakes_order(n, n / 100, true));
-        assert!(!remakes_order(n, n / 4, false));
+        assert_eq!(order_at_merge(n, n / 4, true), counted);
         assert!(!remakes_order(n, n / 40, true));
         assert!(remakes_order(n, n / 36, true));
         let huge = 1usize << 30;
         assert!(remakes_order(huge, huge / 50, true), "unpacked: 1/56");
         assert!(!remakes_order(huge, huge / 60, true), "unpacked: 1/56");
+        // A float sort is made again only where it takes a byte per vertex
+        // off the peak: noisy fields, white noise (half the vertices
+        // candidates), not smooth ones.
+        for n in [n, 1 << 24, huge] {
+            assert_eq!(order_at_merge(n, n / 2, false), sorted, "{n}");
+            assert_eq!(order_at_merge(n, n / 4, false), sorted, "{n}");
+            assert_eq!(order_at_merge(n, n / 100, false), kept, "{n}");
+            assert_eq!(order_at_merge(n, 1000, false), kept, "{n}");
+            for k in [n / 2, n / 4, n / 10, n / 20, n / 100] {
+                let order_bytes = 4 * n as u64;
+                let peak = |order| peak_bytes(n, k, order_bytes, order);
+                if order_at_merge(n, k, false) == sorted {
+                    assert!(peak(sorted) + n as u64 <= peak(kept), "{n} {k}");
+                } else {
+                    assert!(peak(sorted) + n as u64 > peak(kept), "{n} {k}");
+                }
+                // The float sort's pairs are counted: never below the
+                // order's own grouping.
+                assert!(peak(sorted) >= peak(counted), "{n} {k}");
+            }
+        }
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
             for k in [n / 36, n / 20, n / 16, n / 4, n / 2] {
-                let held = peak_bytes(n, k, order_bytes, false);
-                let remade = peak_bytes(n, k, order_bytes, true);
+                let held = peak_bytes(n, k, order_bytes, kept);
+                let remade = peak_bytes(n, k, order_bytes, counted);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
             for k in [0, n / 64, n / 50, n / 40] {
-                let held = peak_bytes(n, k, order_bytes, false);
-                assert_eq!(held, peak_bytes(n, k, order_bytes, true), "{k}");
+                let held = peak_bytes(n, k, order_bytes, kept);
+                assert_eq!(held, peak_bytes(n, k, order_bytes, counted), "{k}");
             }
             let (k, order_bytes) = (huge / 50, per_vertex * huge as u64);
             assert!(
-                peak_bytes(huge, k, order_bytes, true) < peak_bytes(huge, k, order_bytes, false)
+                peak_bytes(huge, k, order_bytes, counted) < peak_bytes(huge, k, order_bytes, kept)
             );
         }
     }
+
+    /// White noise of 2 M vertices (more than [`REMAKE_MIN_VERTICES`]):
+    /// its float order is let go during the merge and sorted again, and the
+    /// tree is the one built with the order held throughout.
+    #[test]
+    fn an_order_sorted_again_gives_the_same_tree() {
+        let noisy = crate::field::source::synthetic_spec("synthetic-noisy:128")
+            .expect("spec")
+            .expect("synthetic")
+            .generate();
+        let n = noisy.len();
+        let candidates = crate::with_values!(noisy.values(), v => sweep::count_candidates_of(&noisy.mesh(), v.as_slice()));
+        let counting = crate::field::sorts_by_counting(noisy.values());
+        assert_eq!(
+            order_at_merge(n, candidates, counting),
+            OrderAtMerge::Sorted
+        );
+        let (sorted_again, _) = ContourTree::from_field(&noisy, &Progress::new()).expect("tree");
+        let order = noisy.vertex_order();
+        let (held, _) = crate::with_values!(noisy.values(), v => ContourTree::build(&noisy.mesh(), v.as_slice(), &order, &Progress::new()))
+            .expect("tree");
+        assert!(sorted_again.arcs().len() > n / 10, "white noise");
+        assert_eq!(parts(&sorted_again), parts(&held));
+    }
+
     use crate::field::Values;
     use proptest::prelude::*;
 
