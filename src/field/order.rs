@@ -10,7 +10,9 @@
 //!
 //! The tree engine holds the order of 8-bit values packed
 //! ([`compact_vertex_order`], [`PackedOrder`]): about one byte per vertex
-//! instead of 4, read back 64 Ki ids at a time ([`OrderView`]).
+//! instead of 4, read back 64 Ki ids at a time ([`OrderView`]); the order
+//! of any other values, where there are at most 2^24 vertices (a 256³
+//! volume), in 3 bytes per id ([`Order::Narrow`]).
 
 use super::Values;
 use rayon::prelude::*;
@@ -38,37 +40,70 @@ pub fn vertex_order(values: &Values) -> Vec<u32> {
 }
 
 /// The vertex order as the engine holds it while it builds a tree: the
-/// ids, or for 8-bit values the same ids packed in about a byte each
+/// ids, in 3 bytes each where there are at most 2^24 vertices, or for
+/// 8-bit values the same ids packed in about a byte each
 /// ([`PackedOrder`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Order {
     /// One id per position, 4 bytes each.
     Ids(Vec<u32>),
+    /// One id per position in 3 bytes, little end first: at most
+    /// [`NARROW_VERTICES`] vertices.
+    Narrow(Vec<[u8; 3]>),
     /// The ids' low halves and the runs of their high halves.
     Packed(PackedOrder),
 }
 
+/// The most vertices whose ids fit [`Order::Narrow`]'s 3 bytes.
+pub const NARROW_VERTICES: usize = 1 << 24;
+
 /// [`vertex_order`] in the form that takes least memory: packed for 8-bit
 /// values (about a byte per vertex, [`PackedOrder`]), the
-/// ids otherwise.
+/// ids in 3 bytes each for at most [`NARROW_VERTICES`] vertices, else in 4.
+/// Narrowing holds the ids beside their 3-byte copy (7 bytes per vertex),
+/// below the float sort's 8.
 pub fn compact_vertex_order(values: &Values) -> Order {
     match values {
         Values::U8(v) => Order::Packed(PackedOrder::sort(v.len(), &|i| v[i] as usize)),
         Values::I8(v) => Order::Packed(PackedOrder::sort(v.len(), &|i| {
             (v[i] as i16 + 128) as usize
         })),
-        _ => Order::Ids(vertex_order(values)),
+        _ => narrowed(vertex_order(values)),
     }
+}
+
+/// The ids as an [`Order`]: in 3 bytes each where they fit.
+fn narrowed(ids: Vec<u32>) -> Order {
+    if ids.len() > NARROW_VERTICES {
+        return Order::Ids(ids);
+    }
+    let mut narrow = vec![[0u8; 3]; ids.len()];
+    narrow
+        .par_chunks_mut(1 << 16)
+        .zip(ids.par_chunks(1 << 16))
+        .for_each(|(out, ids)| {
+            for (o, &id) in out.iter_mut().zip(ids) {
+                let b = id.to_le_bytes();
+                *o = [b[0], b[1], b[2]];
+            }
+        });
+    Order::Narrow(narrow)
+}
+
+/// The bytes an order of ids takes for `n` vertices: 3 per vertex where
+/// they narrow ([`Order::Narrow`]), else 4.
+pub fn ids_bytes(n: usize) -> u64 {
+    if n <= NARROW_VERTICES { 3 } else { 4 }
 }
 
 /// The bytes [`compact_vertex_order`] takes for these values: what the
 /// packed order will hold where it packs them (its runs sized by a
-/// counting pass, in parallel), else 4 per vertex.
+/// counting pass, in parallel), else 3 or 4 per vertex ([`ids_bytes`]).
 pub fn order_bytes(values: &Values) -> u64 {
     match values {
         Values::U8(v) => packed_bytes(v.len(), &|i| v[i] as usize),
         Values::I8(v) => packed_bytes(v.len(), &|i| (v[i] as i16 + 128) as usize),
-        _ => 4 * values.len() as u64,
+        _ => ids_bytes(values.len()) * values.len() as u64,
     }
 }
 
@@ -77,6 +112,7 @@ impl Order {
     pub fn view(&self) -> OrderView<'_> {
         match self {
             Order::Ids(ids) => OrderView::Ids(ids),
+            Order::Narrow(ids) => OrderView::Narrow(ids),
             Order::Packed(p) => OrderView::Packed(p),
         }
     }
@@ -469,11 +505,14 @@ fn keep_within(buf: &mut Vec<u32>, from: usize, ids: &std::ops::Range<u32>) {
     buf.truncate(kept);
 }
 
-/// A vertex order to read: borrowed ids or a [`PackedOrder`].
+/// A vertex order to read: borrowed ids, narrow or not, or a
+/// [`PackedOrder`].
 #[derive(Clone, Copy, Debug)]
 pub enum OrderView<'a> {
     /// The ids.
     Ids(&'a [u32]),
+    /// The ids in 3 bytes each ([`Order::Narrow`]).
+    Narrow(&'a [[u8; 3]]),
     /// Packed ids.
     Packed(&'a PackedOrder),
 }
@@ -489,6 +528,7 @@ impl<'a> OrderView<'a> {
     pub fn len(&self) -> usize {
         match self {
             OrderView::Ids(ids) => ids.len(),
+            OrderView::Narrow(ids) => ids.len(),
             OrderView::Packed(p) => p.len(),
         }
     }
@@ -502,6 +542,7 @@ impl<'a> OrderView<'a> {
     pub fn bytes(&self) -> u64 {
         match self {
             OrderView::Ids(ids) => 4 * ids.len() as u64,
+            OrderView::Narrow(ids) => 3 * ids.len() as u64,
             OrderView::Packed(p) => p.bytes(),
         }
     }
@@ -514,6 +555,15 @@ impl<'a> OrderView<'a> {
     {
         match *self {
             OrderView::Ids(ids) => &ids[range],
+            OrderView::Narrow(ids) => {
+                buf.clear();
+                buf.extend(
+                    ids[range]
+                        .iter()
+                        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], 0])),
+                );
+                buf
+            }
             OrderView::Packed(p) => p.read(range, buf),
         }
     }
@@ -531,6 +581,11 @@ impl<'a> OrderView<'a> {
             OrderView::Ids(all) => {
                 buf.clear();
                 buf.extend_from_slice(&all[range]);
+                keep_within(buf, 0, &ids);
+                buf
+            }
+            OrderView::Narrow(_) => {
+                self.read(range, buf);
                 keep_within(buf, 0, &ids);
                 buf
             }
@@ -954,9 +1009,44 @@ mod tests {
                 let within: Vec<u32> = plain[range.clone()].iter().copied().filter(|v| ids.contains(v)).collect();
                 proptest::prop_assert_eq!(view.read_within(range.clone(), ids.clone(), &mut buf), &within[..]);
                 let whole = OrderView::Ids(&plain);
-                proptest::prop_assert_eq!(whole.read_within(range, ids, &mut buf), &within[..]);
+                proptest::prop_assert_eq!(whole.read_within(range.clone(), ids.clone(), &mut buf), &within[..]);
+                let Order::Narrow(narrow) = narrowed(plain.clone()) else {
+                    panic!("narrow")
+                };
+                let narrow = OrderView::Narrow(&narrow);
+                proptest::prop_assert_eq!(narrow.bytes(), 3 * n as u64);
+                proptest::prop_assert_eq!(narrow.read(range.clone(), &mut buf), &plain[range.clone()]);
+                chunks.clear();
+                narrow.for_each_chunk(range.clone(), |ids| chunks.extend_from_slice(ids));
+                proptest::prop_assert_eq!(&chunks[..], &plain[range.clone()]);
+                proptest::prop_assert_eq!(narrow.read_within(range, ids, &mut buf), &within[..]);
             }
         }
+    }
+
+    /// Ids up to 2^24 - 1 narrow to 3 bytes and read back; an order of more
+    /// vertices keeps 4 bytes per id.
+    #[test]
+    fn ids_narrow_to_three_bytes_up_to_2_to_the_24() {
+        let top = NARROW_VERTICES as u32 - 1;
+        let ids = vec![top, 0, 1 << 16, 255, 1 << 23, top - 1];
+        let Order::Narrow(narrow) = narrowed(ids.clone()) else {
+            panic!("narrow")
+        };
+        let mut buf = Vec::new();
+        assert_eq!(OrderView::Narrow(&narrow).read(0..6, &mut buf), &ids[..]);
+        assert_eq!(OrderView::Narrow(&narrow).read(2..5, &mut buf), &ids[2..5]);
+        assert_eq!(
+            (ids_bytes(NARROW_VERTICES), ids_bytes(NARROW_VERTICES + 1)),
+            (3, 4)
+        );
+        assert!(matches!(
+            narrowed(vec![0; NARROW_VERTICES + 1]),
+            Order::Ids(_)
+        ));
+        let floats = Values::F32((0..1000).map(|i| ((i * 7919) % 1000) as f32).collect());
+        assert_eq!(compact_vertex_order(&floats).view().bytes(), 3000);
+        assert_eq!(order_bytes(&floats), 3000);
     }
 
     /// A value common in its block is a bitmap, one spread thinly gaps,

@@ -131,7 +131,7 @@
 use super::leafward::{self, Leafward, Word, with_entries, with_words};
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
-use crate::field::{OrderView, VertexOrder};
+use crate::field::{Order, OrderView, VertexOrder};
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
 
@@ -874,19 +874,17 @@ pub fn group<O: VertexOrder + ?Sized>(placed: Placed, order: OrderView<'_>, valu
 }
 
 /// [`group`] with an order the grouping owns (and lets go): where the
-/// superarcs are few enough for it, read from its end in slabs, each
-/// slab's pages given back once grouped ([`group_by_arc_consuming`]).
-pub fn group_owned<O: VertexOrder + ?Sized>(
-    placed: Placed,
-    order: Vec<u32>,
-    values: &O,
-) -> Grouped {
-    let (n, arcs) = (order.len(), placed.arcs.len());
-    let consuming = arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n;
+/// superarcs are few enough for it and the order is ids (narrow or not),
+/// read from its end in slabs, each slab's pages given back once grouped
+/// ([`group_by_arc_consuming`]).
+pub fn group_owned<O: VertexOrder + ?Sized>(placed: Placed, order: Order, values: &O) -> Grouped {
+    let (n, arcs) = (order.view().len(), placed.arcs.len());
+    let ids = !matches!(order, Order::Packed(_));
+    let consuming = ids && arcs * CONSUMING_CHUNKS * rayon::current_num_threads() * SLABS <= n;
     let (offsets, arc_vertices) = with_entries!(&placed.vertex_arc, vertex_arc => if consuming {
         group_by_arc_consuming(vertex_arc, arcs, order)
     } else {
-        group_by_arc(vertex_arc, &placed.ends(values), OrderView::Ids(&order))
+        group_by_arc(vertex_arc, &placed.ends(values), order.view())
     });
     Grouped {
         placed,
@@ -1190,21 +1188,22 @@ fn arc_sizes<W: Word>(vertex_arc: &[W], arcs: usize) -> Vec<u32> {
 /// [`group_by_arc`] for an order the grouping owns: read from its end in
 /// [`SLABS`] slabs, each slab's pages given back once it is grouped, so
 /// that the order and the arcs' vertex lists (whose pages are touched as
-/// they are written) hold about 4 bytes per vertex together, not 8: on a
-/// float field, whose order is 4 bytes per vertex and not remade, that
+/// they are written) hold about 4 bytes per vertex together, not 8 (7
+/// for a narrow order, whose slabs are widened one at a time): on a
+/// float field, whose order is not remade, that
 /// was the build's peak. Each arc's slots fill from its end down, slab by
 /// slab and, within a slab, chunk by chunk from the last: the same layout.
 fn group_by_arc_consuming<W: Word>(
     vertex_arc: &[W],
     arcs: usize,
-    order: Vec<u32>,
+    order: Order,
 ) -> (Vec<u32>, Vec<u32>) {
     // Where an id and a superarc (or `arcs` for a node) fit in one word
     // together, the count writes each position's superarc beside its id,
     // so that the scatter reads the slab in sequence instead of looking
     // every vertex up again at a scattered place: the smooth fields, whose
     // superarcs are few.
-    let id_bits = usize::BITS - (order.len().max(2) - 1).leading_zeros();
+    let id_bits = usize::BITS - (order.view().len().max(2) - 1).leading_zeros();
     let fits = id_bits < u32::BITS && (arcs as u64) < 1 << (u32::BITS - id_bits);
     group_by_arc_in_slabs(vertex_arc, arcs, order, fits.then_some(id_bits))
 }
@@ -1214,10 +1213,10 @@ fn group_by_arc_consuming<W: Word>(
 fn group_by_arc_in_slabs<W: Word>(
     vertex_arc: &[W],
     arcs: usize,
-    mut order: Vec<u32>,
+    mut order: Order,
     packed: Option<u32>,
 ) -> (Vec<u32>, Vec<u32>) {
-    let n = order.len();
+    let n = order.view().len();
     let sizes = arc_sizes(vertex_arc, arcs);
     let mut offsets = vec![0u32; arcs + 1];
     for a in 0..arcs {
@@ -1230,17 +1229,29 @@ fn group_by_arc_in_slabs<W: Word>(
     let mut free_end: Vec<u32> = offsets[1..].to_vec();
     let chunks = CONSUMING_CHUNKS * rayon::current_num_threads();
     let slab = n.div_ceil(SLABS).max(1);
+    // A slab of a narrow (or packed) order, widened.
+    let mut wide = Vec::new();
     let mut hi = n;
     while hi > 0 {
         let lo = hi.saturating_sub(slab);
+        let ids: &mut [u32] = match &mut order {
+            Order::Ids(ids) => &mut ids[lo..hi],
+            narrow => {
+                wide.clear();
+                narrow
+                    .view()
+                    .for_each_chunk(lo..hi, |ids| wide.extend_from_slice(ids));
+                &mut wide
+            }
+        };
         let per = (hi - lo).div_ceil(chunks).max(1);
-        let ranges: Vec<std::ops::Range<usize>> = (lo..hi)
+        let ranges: Vec<std::ops::Range<usize>> = (0..hi - lo)
             .step_by(per)
-            .map(|s| s..(s + per).min(hi))
+            .map(|s| s..(s + per).min(hi - lo))
             .collect();
         let mut starts = match packed {
-            Some(id_bits) => count_and_pack(&mut order[lo..hi], per, vertex_arc, arcs, id_bits),
-            None => count_in_ranges(OrderView::Ids(&order), vertex_arc, arcs, &ranges),
+            Some(id_bits) => count_and_pack(ids, per, vertex_arc, arcs, id_bits),
+            None => count_in_ranges(OrderView::Ids(ids), vertex_arc, arcs, &ranges),
         };
         // The last chunk's vertices of an arc take its highest free slots.
         for (a, end) in free_end.iter_mut().enumerate() {
@@ -1254,13 +1265,22 @@ fn group_by_arc_in_slabs<W: Word>(
         // arc's free end above).
         match packed {
             // SAFETY: as above.
-            Some(id_bits) => unsafe { scatter_packed(&order[lo..hi], per, id_bits, starts, &dst) },
+            Some(id_bits) => unsafe { scatter_packed(ids, per, id_bits, starts, &dst) },
             None => unsafe {
-                scatter_ranges(OrderView::Ids(&order), vertex_arc, ranges, starts, &dst)
+                scatter_ranges(OrderView::Ids(ids), vertex_arc, ranges, starts, &dst)
             },
         }
-        order.truncate(lo);
-        crate::pages::release_spare(&mut order);
+        match &mut order {
+            Order::Ids(ids) => {
+                ids.truncate(lo);
+                crate::pages::release_spare(ids);
+            }
+            Order::Narrow(ids) => {
+                ids.truncate(lo);
+                crate::pages::release_spare(ids);
+            }
+            Order::Packed(_) => {}
+        }
         hi = lo;
     }
     debug_assert!(free_end.iter().zip(&offsets).all(|(e, o)| e == o));
@@ -1590,20 +1610,27 @@ mod tests {
                 .collect();
             let ends = ArcEnds { values: &rank[..], arcs: &superarcs, nodes: &nodes };
             let whole = group_by_arc(&vertex_arc, &ends, OrderView::Ids(&order));
-            let consumed = group_by_arc_consuming(&vertex_arc, arcs, order.clone());
+            let consumed = group_by_arc_consuming(&vertex_arc, arcs, Order::Ids(order.clone()));
             prop_assert_eq!(&whole, &consumed);
+            // From a narrow order (3 bytes per id), its slabs widened.
+            let narrow = || Order::Narrow(order.iter().map(|v| {
+                let b = v.to_le_bytes();
+                [b[0], b[1], b[2]]
+            }).collect());
+            prop_assert_eq!(&whole, &group_by_arc_consuming(&vertex_arc, arcs, narrow()));
+            prop_assert_eq!(&whole, &group_by_arc_in_slabs(&vertex_arc, arcs, narrow(), None));
             // From the places packed in 3 bytes each, as a tree keeps them.
             let mut places = Leafward::zeroed(n, true);
             with_words!(&mut places, w => w.iter_mut().zip(&vertex_arc).for_each(|(w, &x)| *w = Word::of(x)));
             prop_assert!(places.is_packed());
             let from_packed = with_entries!(&places, p => (
                 group_by_arc(p, &ends, OrderView::Ids(&order)),
-                group_by_arc_consuming(p, arcs, order.clone()),
+                group_by_arc_consuming(p, arcs, Order::Ids(order.clone())),
             ));
             prop_assert_eq!(&whole, &from_packed.0);
             prop_assert_eq!(&whole, &from_packed.1);
             // Read back from the order itself, not written beside the ids.
-            let unpacked = group_by_arc_in_slabs(&vertex_arc, arcs, order.clone(), None);
+            let unpacked = group_by_arc_in_slabs(&vertex_arc, arcs, Order::Ids(order.clone()), None);
             prop_assert_eq!(&whole, &unpacked);
             // Read in slabs by ranges of superarcs on 5 threads.
             let slab = 1 + (hash(7) % 300) as usize;

@@ -14,8 +14,10 @@
 //! divide and conquer of Pascucci and Cole-McLaughlin).
 //!
 //! **Memory per vertex** (n vertices, beyond the field's own values): the
-//! vertex order (4 bytes, or 0.6-1.2 for 8-bit values, whose order is
-//! packed: [`crate::field::PackedOrder`]) plus 6 to 8, plus the
+//! vertex order (4 bytes, 3 for at most 2^24 vertices, whose ids narrow
+//! to 3 bytes: [`crate::field::Order::Narrow`], or 0.6-1.2 for 8-bit
+//! values, whose order is packed: [`crate::field::PackedOrder`]) plus 6
+//! to 8, plus the
 //! candidates' share below. The float sort holds 8 ((value, id) pairs, the
 //! ids then read off in place); the sweeps the order and 6 (each sweep's
 //! one word per vertex, which holds the vertex's link code until the sweep
@@ -82,7 +84,9 @@
 //! merge and sorting it again (session 41) took it to 17.6 (its sweeps,
 //! 4 bytes of order, 8 of records and 10 per candidate, are the peak now,
 //! the grouping 17.2 just below it), for a second float sort: 0.26 s of
-//! 6.3-7.2 on this machine.
+//! 6.3-7.2 on this machine. The ids of an order of at most 2^24 vertices
+//! (a 256³ volume, float or 16-bit) held in 3 bytes each took it to
+//! 16.4-16.5 and `synthetic:256` from 10.3 to 9.3.
 
 pub mod blocks;
 pub mod json;
@@ -280,7 +284,7 @@ impl From<Cancelled> for BuildError {
 /// on; the placement writes `vertex_arc` over the first in its 3 bytes
 /// and gives the second back). Where the order is made again by the
 /// float sort ([`OrderAtMerge::Sorted`]), that sort's (value, id) pairs
-/// (twice the order's bytes) beside the first record's places and the
+/// (8 bytes per vertex) beside the first record's places and the
 /// placed tree's supernodes ([`PLACED_BYTES_PER_SUPERNODE`]).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order: OrderAtMerge) -> u64 {
     peak_bytes_of(n, candidates, candidates / 2, order_bytes, order)
@@ -352,7 +356,7 @@ fn after_sweeps_bytes(
     let grouping = order_bytes + tree_bytes(candidates) * n as u64;
     let sort = if order == OrderAtMerge::Sorted {
         let places = records_bytes(candidates) / 2 * n as u64;
-        2 * order_bytes + places + PLACED_BYTES_PER_SUPERNODE * supernodes as u64
+        8 * n as u64 + places + PLACED_BYTES_PER_SUPERNODE * supernodes as u64
     } else {
         0
     };
@@ -523,7 +527,7 @@ pub fn order_at_merge(n: usize, candidates: usize, counting: bool) -> OrderAtMer
         return OrderAtMerge::Kept;
     }
     if !counting {
-        let order_bytes = 4 * n as u64;
+        let order_bytes = crate::field::ids_bytes(n) * n as u64;
         let kept = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Kept);
         let sorted = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Sorted);
         return if sorted + n as u64 <= kept {
@@ -818,7 +822,7 @@ impl ContourTree {
         // The order is not needed past the grouping: it goes before the
         // tree's node adjacency is made (an order of ids as it is read).
         let grouped = match source {
-            OrderSource::Owned(Order::Ids(ids), _) => merge::group_owned(placed, ids, values),
+            OrderSource::Owned(order, _) => merge::group_owned(placed, order, values),
             source => merge::group(placed, source.order(), values),
         };
         let tree = grouped.into_tree();
@@ -1207,15 +1211,16 @@ mod tests {
         assert!(remakes_order(huge, huge / 50, true), "unpacked: 1/56");
         assert!(!remakes_order(huge, huge / 60, true), "unpacked: 1/56");
         // A float sort is made again only where it takes a byte per vertex
-        // off the peak: noisy fields, white noise (half the vertices
-        // candidates), not smooth ones.
+        // off the peak: white noise (half the vertices candidates), noisy
+        // fields whose order is 4 bytes per vertex, not smooth ones.
+        assert_eq!(order_at_merge(huge, huge / 4, false), sorted);
+        assert_eq!(order_at_merge(n, n / 4, false), kept, "narrow: 3 bytes");
         for n in [n, 1 << 24, huge] {
             assert_eq!(order_at_merge(n, n / 2, false), sorted, "{n}");
-            assert_eq!(order_at_merge(n, n / 4, false), sorted, "{n}");
             assert_eq!(order_at_merge(n, n / 100, false), kept, "{n}");
             assert_eq!(order_at_merge(n, 1000, false), kept, "{n}");
             for k in [n / 2, n / 4, n / 10, n / 20, n / 100] {
-                let order_bytes = 4 * n as u64;
+                let order_bytes = crate::field::ids_bytes(n) * n as u64;
                 let peak = |order| peak_bytes(n, k, order_bytes, order);
                 if order_at_merge(n, k, false) == sorted {
                     assert!(peak(sorted) + n as u64 <= peak(kept), "{n} {k}");
