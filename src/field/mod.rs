@@ -20,8 +20,8 @@ pub mod synthetic;
 
 pub use geometry::{Geometry, GeometryError, Space};
 pub use order::{
-    NARROW_VERTICES, Order, OrderView, PackedOrder, compact_vertex_order, ids_bytes, order_bytes,
-    sorts_by_counting, vertex_order,
+    NARROW_VERTICES, Order, OrderView, PackedOrder, compact_vertex_order, ids_bytes, narrow_id,
+    order_bytes, sorts_by_counting, vertex_order,
 };
 
 use rayon::prelude::*;

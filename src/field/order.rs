@@ -83,11 +83,22 @@ fn narrowed(ids: Vec<u32>) -> Order {
         .zip(ids.par_chunks(1 << 16))
         .for_each(|(out, ids)| {
             for (o, &id) in out.iter_mut().zip(ids) {
-                let b = id.to_le_bytes();
-                *o = [b[0], b[1], b[2]];
+                *o = narrow_id(id);
             }
         });
     Order::Narrow(narrow)
+}
+
+/// An id below 2^24 in 3 bytes, little end first.
+pub fn narrow_id(id: u32) -> [u8; 3] {
+    let b = id.to_le_bytes();
+    [b[0], b[1], b[2]]
+}
+
+/// The id [`narrow_id`] wrote.
+#[inline(always)]
+fn wide_id(b: [u8; 3]) -> u32 {
+    u32::from_le_bytes([b[0], b[1], b[2], 0])
 }
 
 /// The bytes an order of ids takes for `n` vertices: 3 per vertex where
@@ -557,11 +568,7 @@ impl<'a> OrderView<'a> {
             OrderView::Ids(ids) => &ids[range],
             OrderView::Narrow(ids) => {
                 buf.clear();
-                buf.extend(
-                    ids[range]
-                        .iter()
-                        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], 0])),
-                );
+                buf.extend(ids[range].iter().map(|&b| wide_id(b)));
                 buf
             }
             OrderView::Packed(p) => p.read(range, buf),

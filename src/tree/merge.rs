@@ -1613,10 +1613,7 @@ mod tests {
             let consumed = group_by_arc_consuming(&vertex_arc, arcs, Order::Ids(order.clone()));
             prop_assert_eq!(&whole, &consumed);
             // From a narrow order (3 bytes per id), its slabs widened.
-            let narrow = || Order::Narrow(order.iter().map(|v| {
-                let b = v.to_le_bytes();
-                [b[0], b[1], b[2]]
-            }).collect());
+            let narrow = || Order::Narrow(order.iter().map(|&v| crate::field::narrow_id(v)).collect());
             prop_assert_eq!(&whole, &group_by_arc_consuming(&vertex_arc, arcs, narrow()));
             prop_assert_eq!(&whole, &group_by_arc_in_slabs(&vertex_arc, arcs, narrow(), None));
             // From the places packed in 3 bytes each, as a tree keeps them.
