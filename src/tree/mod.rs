@@ -282,10 +282,10 @@ impl From<Cancelled> for BuildError {
 /// ([`tree_bytes`]). The records take 8 bytes per vertex, or 6 with fewer
 /// than 2^23 candidates ([`leafward`]: 3 bytes each from the link pass
 /// on; the placement writes `vertex_arc` over the first in its 3 bytes
-/// and gives the second back). Where the order is made again by the
-/// float sort ([`OrderAtMerge::Sorted`]), that sort's (value, id) pairs
-/// (8 bytes per vertex) beside the first record's places and the
-/// placed tree's supernodes ([`PLACED_BYTES_PER_SUPERNODE`]).
+/// and gives the second back). Where the order is made again, the sort
+/// ([`remake_bytes`]: the float sort's (value, id) pairs, 8 bytes per
+/// vertex) beside the first record's places and the placed tree's
+/// supernodes ([`PLACED_BYTES_PER_SUPERNODE`]).
 pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order: OrderAtMerge) -> u64 {
     peak_bytes_of(n, candidates, candidates / 2, order_bytes, order)
 }
@@ -354,13 +354,29 @@ fn after_sweeps_bytes(
         0
     };
     let grouping = order_bytes + tree_bytes(candidates) * n as u64;
-    let sort = if order == OrderAtMerge::Sorted {
-        let places = records_bytes(candidates) / 2 * n as u64;
-        8 * n as u64 + places + PLACED_BYTES_PER_SUPERNODE * supernodes as u64
-    } else {
+    let sort = if order == OrderAtMerge::Kept {
         0
+    } else {
+        let places = records_bytes(candidates) / 2 * n as u64;
+        let placed = PLACED_BYTES_PER_SUPERNODE * supernodes as u64;
+        remake_bytes(n, order_bytes, order) + places + placed
     };
     (merge + held).max(grouping).max(sort)
+}
+
+/// What making the order again holds while it runs: the float sort its
+/// (key, id) pairs, 8 bytes per vertex; a counting sort of 16-bit values
+/// its ids, 4 bytes per vertex, and where they narrow their 3-byte copy
+/// beside them ([`crate::field::Order::Narrow`]); the packed order of
+/// 8-bit values about itself.
+fn remake_bytes(n: usize, order_bytes: u64, order: OrderAtMerge) -> u64 {
+    let n = n as u64;
+    match order {
+        OrderAtMerge::Kept => 0,
+        OrderAtMerge::Sorted => 8 * n,
+        OrderAtMerge::Counted if order_bytes == 3 * n => 7 * n,
+        OrderAtMerge::Counted => order_bytes,
+    }
 }
 
 /// What the placed tree holds per supernode while the order is made again
@@ -1249,6 +1265,14 @@ mod tests {
                 peak_bytes(huge, k, order_bytes, counted) < peak_bytes(huge, k, order_bytes, kept)
             );
         }
+        // A counting sort of 16-bit values holds its ids beside their
+        // narrow copy: 7 bytes per vertex, then the 3 of the order.
+        let (k, narrow) = (n / 2, 3 * n as u64);
+        let placed = 3 * n as u64 + PLACED_BYTES_PER_SUPERNODE * (k / 2) as u64;
+        assert!(peak_bytes(n, k, narrow, counted) >= 7 * n as u64 + placed);
+        assert_eq!(remake_bytes(n, narrow, counted), 7 * n as u64);
+        assert_eq!(remake_bytes(n, 4 * n as u64, counted), 4 * n as u64);
+        assert_eq!(remake_bytes(n, n as u64, counted), n as u64);
     }
 
     /// White noise of 2 M vertices (more than [`REMAKE_MIN_VERTICES`]):
