@@ -1135,52 +1135,17 @@ mod tests {
         // the sweeps held (11.6 bytes per vertex); 20 % are not, and the
         // merge on all candidates needs 19.4, 6.6 GiB beyond the 12.8 held.
         let (few, many) = (n * 8 / 100, n * 20 / 100);
-        assert!(check_merge_memory(n, noisy, few, order, OrderAtMerge::Counted, 0).is_ok());
-        assert!(
-            check_merge_memory(
-                n,
-                noisy,
-                many,
-                order,
-                OrderAtMerge::Counted,
-                6610 * (gib / 1000)
-            )
-            .is_ok()
-        );
-        assert!(
-            check_merge_memory(
-                n,
-                noisy,
-                many,
-                order,
-                OrderAtMerge::Counted,
-                6590 * (gib / 1000)
-            )
-            .is_err()
-        );
+        let (counted, kept) = (OrderAtMerge::Counted, OrderAtMerge::Kept);
+        let merge_fits = |supernodes, plan, thousandths: u64| {
+            let available = thousandths * (gib / 1000);
+            check_merge_memory(n, noisy, supernodes, order, plan, available).is_ok()
+        };
+        assert!(merge_fits(few, counted, 0));
+        assert!(merge_fits(many, counted, 6610));
+        assert!(!merge_fits(many, counted, 6590));
         // Held through the merge, the order needs its 2 more.
-        assert!(
-            check_merge_memory(
-                n,
-                noisy,
-                many,
-                order,
-                OrderAtMerge::Kept,
-                8590 * (gib / 1000)
-            )
-            .is_err()
-        );
-        assert!(
-            check_merge_memory(
-                n,
-                noisy,
-                many,
-                order,
-                OrderAtMerge::Kept,
-                8610 * (gib / 1000)
-            )
-            .is_ok()
-        );
+        assert!(!merge_fits(many, kept, 8590));
+        assert!(merge_fits(many, kept, 8610));
         // Fewer than 2^24 candidates: the tables in 3 bytes per number,
         // 30 bytes per candidate where half are supernodes.
         assert_eq!(merge_bytes_per_candidate(1 << 22, 1 << 20), 30);
