@@ -337,8 +337,8 @@ fn peak_bytes_of(
 }
 
 /// What the build holds at its peak after the sweeps: the merge (beside
-/// the order where it is kept), the grouping, and the float sort that
-/// makes the order again ([`OrderAtMerge::Sorted`]).
+/// the order where it is kept), the grouping, and the sort that makes
+/// the order again where it was let go ([`remake_bytes`]).
 fn after_sweeps_bytes(
     n: usize,
     candidates: usize,
