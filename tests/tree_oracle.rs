@@ -252,6 +252,7 @@ fn sweep_trees_both_ways<M: Mesh>(
         join: words.join.clone().widen(),
         split: words.split.clone().widen(),
         candidates,
+        extrema: words.extrema,
     };
     // The whole sweeps with each candidate's parent written into its word
     // (what the engine does with words): the same trees, word for word.
@@ -259,6 +260,7 @@ fn sweep_trees_both_ways<M: Mesh>(
         join: words.join.clone(),
         split: words.split.clone(),
         candidates,
+        extrema: words.extrema,
     };
     let n = mesh.num_vertices() as u32;
     let ((in_words_join, _), (mut in_words_split, _)) =

@@ -190,16 +190,18 @@ fn tree_memory(f: &ScalarField) -> (usize, usize, u64) {
     use crate::tree::blocks;
     let mesh = f.mesh();
     let n = f.len();
-    let candidates = crate::with_values!(f.values(), v => crate::tree::sweep::count_candidates_of(&mesh, v.as_slice()));
+    let census =
+        crate::with_values!(f.values(), v => crate::tree::sweep::census_of(&mesh, v.as_slice()));
+    let candidates = census.candidates;
     let counting = crate::field::sorts_by_counting(f.values());
-    let remade = crate::tree::order_at_merge(n, candidates, counting);
+    let remade = crate::tree::order_at_merge(n, census, counting);
     let order_bytes = crate::field::order_bytes(f.values());
     let span = mesh.edge_span();
     let blocks = blocks::chosen_blocks(n, span, candidates);
     let band = blocks::band_vertices(&blocks::even_cuts(n, blocks), n, span);
     let available = crate::field::io::available_memory();
     let (peak, in_blocks) =
-        crate::tree::peak_bytes_in_blocks(n, candidates, order_bytes, remade, band, available);
+        crate::tree::peak_bytes_in_blocks(n, census, order_bytes, remade, band, available);
     let blocks = if in_blocks { blocks } else { 1 };
     (candidates, blocks, peak)
 }

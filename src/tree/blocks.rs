@@ -231,6 +231,7 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
         join: mut join_words,
         split: mut split_words,
         candidates,
+        ..
     } = words;
     assert!(
         cuts.first() == Some(&0)

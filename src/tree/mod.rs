@@ -64,8 +64,11 @@
 //! 13.8 (28 %, too many candidates to pack; the sweeps, where the merge
 //! held 16.5), white noise 22.3 (29.5). [`check_memory`] refuses a
 //! build that would not fit as soon as the candidates are counted, with
-//! half of them taken for supernodes, and [`check_merge_memory`] again
-//! with their real number once the sweeps are done. The
+//! as many supernodes as the extrema allow (at most twice as many:
+//! [`sweep::Census::supernodes_at_most`], 0.1-2 % above the real number on
+//! the shared scans; half the candidates before session 42), and
+//! [`check_merge_memory`] again with their real number once the sweeps are
+//! done. The
 //! finished tree keeps 7 bytes per vertex (`vertex_arc` in 3, and
 //! `arc_vertices` 4 per regular vertex; 8 where the records did not pack)
 //! plus 28 per supernode: 11.15 on tooth. Keeping the places in 3 bytes
@@ -103,6 +106,7 @@ use crate::progress::{Cancelled, Progress};
 use leafward::{Leafward, Word};
 use merge::NODE_FLAG;
 use std::time::{Duration, Instant};
+use sweep::Census;
 
 /// Index of a supernode in [`ContourTree::nodes`]. Nodes are sorted by the
 /// vertex order, so comparing ids compares heights.
@@ -268,13 +272,14 @@ impl From<Cancelled> for BuildError {
     }
 }
 
-/// Peak bytes the engine holds beyond the values for `n` vertices of
-/// which `candidates` are candidate nodes (the module doc's account), with
-/// an order of `order_bytes` (about 1 per vertex packed for 8-bit values,
-/// else 4: [`crate::field::order_bytes`]), before the sweeps tell how many
-/// of the candidates are supernodes: half of them, as on every scan
-/// measured (44-50 %; [`check_merge_memory`] checks again with the real
-/// number). The order, the two sweeps' records and 16 per candidate while
+/// Peak bytes the engine holds beyond the values for `n` vertices whose
+/// link classification counted `census` (its candidate nodes, the module
+/// doc's account, and extrema), with an order of `order_bytes` (about 1
+/// per vertex packed for 8-bit values, else 4:
+/// [`crate::field::order_bytes`]), before the sweeps tell how many of the
+/// candidates are supernodes: at most twice the extrema
+/// ([`sweep::Census::supernodes_at_most`]; [`check_merge_memory`] checks
+/// again with the real number). The order, the two sweeps' records and 16 per candidate while
 /// sweeping; then the order unless it is let go (`order`, see
 /// [`order_at_merge`]) and, at the merge, the records and the candidates'
 /// tables ([`merge_table_bytes`]); at the grouping the order (made again if
@@ -286,8 +291,9 @@ impl From<Cancelled> for BuildError {
 /// ([`remake_bytes`]: the float sort's (value, id) pairs, 8 bytes per
 /// vertex) beside the first record's places and the placed tree's
 /// supernodes ([`PLACED_BYTES_PER_SUPERNODE`]).
-pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order: OrderAtMerge) -> u64 {
-    peak_bytes_of(n, candidates, candidates / 2, order_bytes, order)
+pub fn peak_bytes(n: usize, census: Census, order_bytes: u64, order: OrderAtMerge) -> u64 {
+    let supernodes = census.supernodes_at_most();
+    peak_bytes_of(n, census.candidates, supernodes, order_bytes, order)
 }
 
 /// [`peak_bytes`] for a build whose join and split trees are swept in
@@ -300,13 +306,14 @@ pub fn peak_bytes(n: usize, candidates: usize, order_bytes: u64, order: OrderAtM
 /// this is [`peak_bytes`] and false.
 pub fn peak_bytes_in_blocks(
     n: usize,
-    candidates: usize,
+    census: Census,
     order_bytes: u64,
     order: OrderAtMerge,
     band: usize,
     available: Option<u64>,
 ) -> (u64, bool) {
-    let whole = peak_bytes(n, candidates, order_bytes, order);
+    let whole = peak_bytes(n, census, order_bytes, order);
+    let candidates = census.candidates;
     let held = order_bytes + records_bytes(candidates) * n as u64;
     if band > 0 && glue_fits(candidates, band, held, available) {
         let glue = held.saturating_add(glue_bytes(candidates, band));
@@ -526,7 +533,8 @@ pub enum OrderAtMerge {
 /// that takes the
 /// merge's tables above a byte per vertex (the merge's 6 bytes per vertex
 /// and its tables above the grouping's 7): more than 1/37.5 of the
-/// vertices as candidates, with half of them supernodes ([`merge_bytes`];
+/// vertices as candidates, with half of them supernodes (at most twice
+/// the extrema, [`sweep::Census::supernodes_at_most`]; [`merge_bytes`];
 /// 1/44 before session 39, 1/22 while the grouping held 8, before session
 /// 38). Otherwise (8 bytes per vertex in the records and
 /// in the grouping) where they are above 2/3 of a byte per vertex: the
@@ -538,21 +546,22 @@ pub enum OrderAtMerge {
 /// the records and about 45 bytes per supernode (23 % of the vertices).
 /// Smooth fields keep it. Volumes of fewer than [`REMAKE_MIN_VERTICES`]
 /// keep their order.
-pub fn order_at_merge(n: usize, candidates: usize, counting: bool) -> OrderAtMerge {
+pub fn order_at_merge(n: usize, census: Census, counting: bool) -> OrderAtMerge {
     if n < REMAKE_MIN_VERTICES {
         return OrderAtMerge::Kept;
     }
     if !counting {
         let order_bytes = crate::field::ids_bytes(n) * n as u64;
-        let kept = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Kept);
-        let sorted = peak_bytes(n, candidates, order_bytes, OrderAtMerge::Sorted);
+        let kept = peak_bytes(n, census, order_bytes, OrderAtMerge::Kept);
+        let sorted = peak_bytes(n, census, order_bytes, OrderAtMerge::Sorted);
         return if sorted + n as u64 <= kept {
             OrderAtMerge::Sorted
         } else {
             OrderAtMerge::Kept
         };
     }
-    let tables = merge_bytes(packs_tables(n, candidates), candidates, candidates / 2);
+    let (candidates, supernodes) = (census.candidates, census.supernodes_at_most());
+    let tables = merge_bytes(packs_tables(n, candidates), candidates, supernodes);
     let above = if leafward::packs(candidates) {
         tables > n as u64
     } else {
@@ -580,12 +589,13 @@ const REMAKE_MIN_VERTICES: usize = 1 << 20;
 /// volumes that are large *and* noisy.
 pub fn check_memory(
     n: usize,
-    candidates: usize,
+    census: Census,
     order_bytes: u64,
     order: OrderAtMerge,
     available: u64,
 ) -> Result<(), BuildError> {
-    let needed = peak_bytes(n, candidates, order_bytes, order);
+    let candidates = census.candidates;
+    let needed = peak_bytes(n, census, order_bytes, order);
     let held = order_bytes + records_bytes(candidates) * n as u64;
     refuse_beyond(n, candidates, needed, available.saturating_add(held))
 }
@@ -756,13 +766,14 @@ impl ContourTree {
         progress.stage("join and split trees");
         let t = Instant::now();
         let words = sweep::link_words(mesh, values);
-        let candidates = words.candidates;
+        let census = words.census();
+        let candidates = census.candidates;
         times.links = t.elapsed();
         let n = mesh.num_vertices();
         // An owned order comes with a way to make it again.
         let (remake, order_plan) = match &source {
             OrderSource::Owned(_, Some((remake, counting))) => {
-                match order_at_merge(n, candidates, *counting) {
+                match order_at_merge(n, census, *counting) {
                     OrderAtMerge::Kept => (None, OrderAtMerge::Kept),
                     plan => (Some(*remake), plan),
                 }
@@ -771,7 +782,7 @@ impl ContourTree {
         };
         let available = crate::field::io::available_memory();
         if let Some(available) = available {
-            check_memory(n, candidates, order_bytes, order_plan, available)?;
+            check_memory(n, census, order_bytes, order_plan, available)?;
         }
         let whole = [0, n as u32];
         let span = mesh.edge_span();
@@ -1053,6 +1064,29 @@ impl ContourTree {
 mod tests {
     use super::*;
 
+    /// `k` candidates of which at most half are supernodes (twice as many
+    /// as a quarter of them extrema).
+    fn half(k: usize) -> Census {
+        Census {
+            candidates: k,
+            extrema: k / 4 + 1,
+        }
+    }
+
+    #[test]
+    fn supernodes_are_at_most_twice_the_extrema_and_never_more_than_the_candidates() {
+        let census = |candidates, extrema| Census {
+            candidates,
+            extrema,
+        };
+        assert_eq!(census(100, 10).supernodes_at_most(), 18);
+        assert_eq!(census(100, 60).supernodes_at_most(), 100);
+        assert_eq!(census(2, 2).supernodes_at_most(), 2);
+        // One vertex, and a mesh that reports no extrema: the candidates.
+        assert_eq!(census(1, 1).supernodes_at_most(), 1);
+        assert_eq!(census(50, 0).supernodes_at_most(), 50);
+    }
+
     #[test]
     fn blocks_are_swept_only_where_their_glue_fits() {
         let whole = [0, 1000];
@@ -1075,9 +1109,9 @@ mod tests {
     #[test]
     fn blocks_add_their_glue_to_the_peak_where_it_fits() {
         let (n, k, order) = (1_000_000, 300_000, 1_000_000);
-        let whole = peak_bytes(n, k, order, OrderAtMerge::Kept);
+        let whole = peak_bytes(n, half(k), order, OrderAtMerge::Kept);
         let peak = |k, band, available| {
-            peak_bytes_in_blocks(n, k, order, OrderAtMerge::Kept, band, available)
+            peak_bytes_in_blocks(n, half(k), order, OrderAtMerge::Kept, band, available)
         };
         assert_eq!(peak(k, 0, None), (whole, false));
         // A third of the vertices candidates: the glue is the peak.
@@ -1088,7 +1122,7 @@ mod tests {
         // Where it does not fit, the build sweeps in one block.
         assert_eq!(peak(k, 20_000, Some(glue - 1)), (whole, false));
         // Few candidates (a smooth field): the whole sweep's peak stands.
-        let smooth = peak_bytes(n, 100, order, OrderAtMerge::Kept);
+        let smooth = peak_bytes(n, half(100), order, OrderAtMerge::Kept);
         assert_eq!(peak(100, 2_000, None), (smooth, true));
     }
 
@@ -1098,7 +1132,7 @@ mod tests {
         let n = 1usize << 30; // 1024^3 uint8: the order packed in at most 2 bytes
         let order = 2 * n as u64;
         // A scan or smooth field (2 % candidates): 10.9 bytes per vertex.
-        assert!(check_memory(n, n / 50, order, OrderAtMerge::Kept, 12 * gib).is_ok());
+        assert!(check_memory(n, half(n / 50), order, OrderAtMerge::Kept, 12 * gib).is_ok());
         // The same volume noisy (28 % candidates, half of them supernodes,
         // so the other 14 % are reduced before the merge): the sweeps hold
         // 12.8 bytes per vertex (each candidate's parent in its record: 10
@@ -1107,23 +1141,63 @@ mod tests {
         // with 4.29; held through the merge, the merge's 16.3 (its tables
         // in 4 bytes per number: over 2^24 candidates) need 6.3.
         let noisy = n * 28 / 100;
-        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 12 * gib).is_ok());
-        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 4310 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, OrderAtMerge::Counted, 4290 * (gib / 1000)).is_err());
-        assert!(check_memory(n, noisy, order, OrderAtMerge::Kept, 6310 * (gib / 1000)).is_ok());
-        assert!(check_memory(n, noisy, order, OrderAtMerge::Kept, 6290 * (gib / 1000)).is_err());
-        let e = check_memory(n, noisy, order, OrderAtMerge::Kept, 6 * gib).expect_err("refused");
+        assert!(check_memory(n, half(noisy), order, OrderAtMerge::Counted, 12 * gib).is_ok());
+        assert!(
+            check_memory(
+                n,
+                half(noisy),
+                order,
+                OrderAtMerge::Counted,
+                4310 * (gib / 1000)
+            )
+            .is_ok()
+        );
+        assert!(
+            check_memory(
+                n,
+                half(noisy),
+                order,
+                OrderAtMerge::Counted,
+                4290 * (gib / 1000)
+            )
+            .is_err()
+        );
+        assert!(
+            check_memory(
+                n,
+                half(noisy),
+                order,
+                OrderAtMerge::Kept,
+                6310 * (gib / 1000)
+            )
+            .is_ok()
+        );
+        assert!(
+            check_memory(
+                n,
+                half(noisy),
+                order,
+                OrderAtMerge::Kept,
+                6290 * (gib / 1000)
+            )
+            .is_err()
+        );
+        let e =
+            check_memory(n, half(noisy), order, OrderAtMerge::Kept, 6 * gib).expect_err("refused");
         let BuildError::OutOfMemory {
             needed, available, ..
         } = e
         else {
             panic!("refused for memory")
         };
-        assert_eq!(needed, peak_bytes(n, noisy, order, OrderAtMerge::Kept));
+        assert_eq!(
+            needed,
+            peak_bytes(n, half(noisy), order, OrderAtMerge::Kept)
+        );
         assert_eq!(available, 6 * gib + 10 * n as u64);
         assert_eq!(
             needed,
-            peak_bytes_of(n, noisy, noisy / 2, order, OrderAtMerge::Kept)
+            peak_bytes_of(n, noisy, 2 * (noisy / 4), order, OrderAtMerge::Kept)
         );
         let message = e.to_string();
         assert!(message.contains("28%"), "{message}");
@@ -1156,10 +1230,19 @@ mod tests {
             let order_bytes = per_vertex * 1000;
             // The order and the packed records, 6 bytes per vertex.
             let held = order_bytes + 6 * 1000;
-            let peak = peak_bytes(1000, 10, order_bytes, OrderAtMerge::Kept);
-            assert!(check_memory(1000, 10, order_bytes, OrderAtMerge::Kept, peak - held).is_ok());
+            let peak = peak_bytes(1000, half(10), order_bytes, OrderAtMerge::Kept);
             assert!(
-                check_memory(1000, 10, order_bytes, OrderAtMerge::Kept, peak - held - 1).is_err()
+                check_memory(1000, half(10), order_bytes, OrderAtMerge::Kept, peak - held).is_ok()
+            );
+            assert!(
+                check_memory(
+                    1000,
+                    half(10),
+                    order_bytes,
+                    OrderAtMerge::Kept,
+                    peak - held - 1
+                )
+                .is_err()
             );
         }
     }
@@ -1172,7 +1255,7 @@ mod tests {
             OrderAtMerge::Counted,
             OrderAtMerge::Sorted,
         );
-        let remakes_order = |n, k, counting| order_at_merge(n, k, counting) != kept;
+        let remakes_order = |n, k, counting| order_at_merge(n, half(k), counting) != kept;
         assert!(
             !remakes_order(n - 1, n / 4, true),
             "a small volume keeps it"
@@ -1185,7 +1268,7 @@ mod tests {
         // below 1/37.5 of the vertices the grouping or the sweeps stay the
         // peak.
         assert!(!remakes_order(n, n / 100, true));
-        assert_eq!(order_at_merge(n, n / 4, true), counted);
+        assert_eq!(order_at_merge(n, half(n / 4), true), counted);
         assert!(!remakes_order(n, n / 40, true));
         assert!(remakes_order(n, n / 36, true));
         let huge = 1usize << 30;
@@ -1194,16 +1277,20 @@ mod tests {
         // A float sort is made again only where it takes a byte per vertex
         // off the peak: white noise (half the vertices candidates), noisy
         // fields whose order is 4 bytes per vertex, not smooth ones.
-        assert_eq!(order_at_merge(huge, huge / 4, false), sorted);
-        assert_eq!(order_at_merge(n, n / 4, false), kept, "narrow: 3 bytes");
+        assert_eq!(order_at_merge(huge, half(huge / 4), false), sorted);
+        assert_eq!(
+            order_at_merge(n, half(n / 4), false),
+            kept,
+            "narrow: 3 bytes"
+        );
         for n in [n, 1 << 24, huge] {
-            assert_eq!(order_at_merge(n, n / 2, false), sorted, "{n}");
-            assert_eq!(order_at_merge(n, n / 100, false), kept, "{n}");
-            assert_eq!(order_at_merge(n, 1000, false), kept, "{n}");
+            assert_eq!(order_at_merge(n, half(n / 2), false), sorted, "{n}");
+            assert_eq!(order_at_merge(n, half(n / 100), false), kept, "{n}");
+            assert_eq!(order_at_merge(n, half(1000), false), kept, "{n}");
             for k in [n / 2, n / 4, n / 10, n / 20, n / 100] {
                 let order_bytes = crate::field::ids_bytes(n) * n as u64;
-                let peak = |order| peak_bytes(n, k, order_bytes, order);
-                if order_at_merge(n, k, false) == sorted {
+                let peak = |order| peak_bytes(n, half(k), order_bytes, order);
+                if order_at_merge(n, half(k), false) == sorted {
                     assert!(peak(sorted) + n as u64 <= peak(kept), "{n} {k}");
                 } else {
                     assert!(peak(sorted) + n as u64 > peak(kept), "{n} {k}");
@@ -1216,25 +1303,26 @@ mod tests {
         for per_vertex in [1, 2, 4] {
             let order_bytes = per_vertex * n as u64;
             for k in [n / 36, n / 20, n / 16, n / 4, n / 2] {
-                let held = peak_bytes(n, k, order_bytes, kept);
-                let remade = peak_bytes(n, k, order_bytes, counted);
+                let held = peak_bytes(n, half(k), order_bytes, kept);
+                let remade = peak_bytes(n, half(k), order_bytes, counted);
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
             for k in [0, n / 64, n / 50, n / 40] {
-                let held = peak_bytes(n, k, order_bytes, kept);
-                assert_eq!(held, peak_bytes(n, k, order_bytes, counted), "{k}");
+                let held = peak_bytes(n, half(k), order_bytes, kept);
+                assert_eq!(held, peak_bytes(n, half(k), order_bytes, counted), "{k}");
             }
             let (k, order_bytes) = (huge / 50, per_vertex * huge as u64);
             assert!(
-                peak_bytes(huge, k, order_bytes, counted) < peak_bytes(huge, k, order_bytes, kept)
+                peak_bytes(huge, half(k), order_bytes, counted)
+                    < peak_bytes(huge, half(k), order_bytes, kept)
             );
         }
         // A counting sort of 16-bit values holds its ids beside their
         // narrow copy: 7 bytes per vertex, then the 3 of the order.
         let (k, narrow) = (n / 2, 3 * n as u64);
         let placed = 3 * n as u64 + PLACED_BYTES_PER_SUPERNODE * (k / 2) as u64;
-        assert!(peak_bytes(n, k, narrow, counted) >= 7 * n as u64 + placed);
+        assert!(peak_bytes(n, half(k), narrow, counted) >= 7 * n as u64 + placed);
         assert_eq!(remake_bytes(n, narrow, counted), 7 * n as u64);
         assert_eq!(remake_bytes(n, 4 * n as u64, counted), 4 * n as u64);
         assert_eq!(remake_bytes(n, n as u64, counted), n as u64);
@@ -1250,12 +1338,10 @@ mod tests {
             .expect("synthetic")
             .generate();
         let n = noisy.len();
-        let candidates = crate::with_values!(noisy.values(), v => sweep::count_candidates_of(&noisy.mesh(), v.as_slice()));
+        let census =
+            crate::with_values!(noisy.values(), v => sweep::census_of(&noisy.mesh(), v.as_slice()));
         let counting = crate::field::sorts_by_counting(noisy.values());
-        assert_eq!(
-            order_at_merge(n, candidates, counting),
-            OrderAtMerge::Sorted
-        );
+        assert_eq!(order_at_merge(n, census, counting), OrderAtMerge::Sorted);
         let (sorted_again, _) = ContourTree::from_field(&noisy, &Progress::new()).expect("tree");
         let order = noisy.vertex_order();
         let (held, _) = crate::with_values!(noisy.values(), v => ContourTree::build(&noisy.mesh(), v.as_slice(), &order, &Progress::new()))
@@ -1303,6 +1389,20 @@ mod tests {
         let order = field.vertex_order();
         let oracle = crate::with_values!(field.values(), v => vertex_merge::build(&field.mesh(), v.as_slice(), &order));
         assert_eq!(parts(&fast), parts(&oracle), "dims {dims:?}");
+        // The extrema the link classification counts are the tree's
+        // leaves, and bound its supernodes, as the memory model takes them
+        // before the sweeps.
+        let census =
+            crate::with_values!(field.values(), v => sweep::census_of(&field.mesh(), v.as_slice()));
+        let (maxima, minima, _, _) = oracle.kind_counts();
+        if field.len() > 1 {
+            assert_eq!(census.extrema, maxima + minima, "dims {dims:?}");
+        }
+        assert!(
+            oracle.nodes().len() <= census.supernodes_at_most(),
+            "dims {dims:?}: {} supernodes, {census:?}",
+            oracle.nodes().len()
+        );
         // The candidates regular in both trees reduced before the merge
         // whenever there is one, and never: the same tree.
         let mesh = field.mesh();
