@@ -43,7 +43,9 @@ pub trait Mesh: Sync {
     /// that does not summarise), or the index of a neighbour in the single
     /// component, to be resolved with [`Mesh::neighbour_at`]. The default
     /// always says [`LINK_SEVERAL`], which sends the sweeps down their
-    /// general path.
+    /// general path. A mesh that says [`LINK_EMPTY`] at all says it for
+    /// every empty link: the extrema it counts bound the supernodes
+    /// ([`crate::tree::sweep::Census::supernodes_at_most`]).
     #[inline(always)]
     fn link_code(&self, _v: u32, _above: impl FnMut(u32) -> bool) -> u8 {
         LINK_SEVERAL | LINK_SEVERAL << 4
