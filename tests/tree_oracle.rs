@@ -238,7 +238,7 @@ fn sweep_trees_both_ways<M: Mesh>(
     );
     // The words seeded with the codes, as the engine makes them.
     let words = sweep::link_words(mesh, values);
-    assert_eq!(words.candidates, candidates);
+    assert_eq!(words.census.candidates, candidates);
     assert!(
         codes
             .iter()
@@ -251,16 +251,14 @@ fn sweep_trees_both_ways<M: Mesh>(
     let wide = sweep::LinkWords {
         join: words.join.clone().widen(),
         split: words.split.clone().widen(),
-        candidates,
-        extrema: words.extrema,
+        census: words.census,
     };
     // The whole sweeps with each candidate's parent written into its word
     // (what the engine does with words): the same trees, word for word.
     let whole_words = sweep::LinkWords {
         join: words.join.clone(),
         split: words.split.clone(),
-        candidates,
-        extrema: words.extrema,
+        census: words.census,
     };
     let n = mesh.num_vertices() as u32;
     let ((in_words_join, _), (mut in_words_split, _)) =

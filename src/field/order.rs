@@ -127,6 +127,24 @@ impl Order {
             Order::Packed(p) => OrderView::Packed(p),
         }
     }
+
+    /// Keeps the first `len` positions of an order of ids, narrow or not,
+    /// and gives the pages past them back ([`crate::pages::release_spare`]):
+    /// what a grouping that consumes the order from its end lets go. A
+    /// packed order is kept whole.
+    pub fn truncate_releasing(&mut self, len: usize) {
+        match self {
+            Order::Ids(ids) => {
+                ids.truncate(len);
+                crate::pages::release_spare(ids);
+            }
+            Order::Narrow(ids) => {
+                ids.truncate(len);
+                crate::pages::release_spare(ids);
+            }
+            Order::Packed(_) => {}
+        }
+    }
 }
 
 /// The vertex order of 8-bit values in about one byte per vertex. A

@@ -230,9 +230,9 @@ pub fn sweep_trees<M: Mesh, O: VertexOrder + ?Sized>(
     let LinkWords {
         join: mut join_words,
         split: mut split_words,
-        candidates,
-        ..
+        census,
     } = words;
+    let candidates = census.candidates;
     assert!(
         cuts.first() == Some(&0)
             && cuts.last() == Some(&(n as u32))

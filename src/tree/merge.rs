@@ -1270,17 +1270,7 @@ fn group_by_arc_in_slabs<W: Word>(
                 scatter_ranges(OrderView::Ids(ids), vertex_arc, ranges, starts, &dst)
             },
         }
-        match &mut order {
-            Order::Ids(ids) => {
-                ids.truncate(lo);
-                crate::pages::release_spare(ids);
-            }
-            Order::Narrow(ids) => {
-                ids.truncate(lo);
-                crate::pages::release_spare(ids);
-            }
-            Order::Packed(_) => {}
-        }
+        order.truncate_releasing(lo);
         hi = lo;
     }
     debug_assert!(free_end.iter().zip(&offsets).all(|(e, o)| e == o));

@@ -766,7 +766,7 @@ impl ContourTree {
         progress.stage("join and split trees");
         let t = Instant::now();
         let words = sweep::link_words(mesh, values);
-        let census = words.census();
+        let census = words.census;
         let candidates = census.candidates;
         times.links = t.elapsed();
         let n = mesh.num_vertices();

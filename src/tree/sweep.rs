@@ -880,28 +880,16 @@ pub(crate) fn prefetch<T>(data: &[T], i: usize) {
 }
 
 /// The two sweeps' words, seeded with every vertex's link code (the same
-/// code in both; see the module documentation), and the number of
-/// candidates and of extrema among them.
+/// code in both; see the module documentation), and the candidates and
+/// extrema counted.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LinkWords {
     /// The join sweep's words.
     pub join: Leafward,
     /// The split sweep's words.
     pub split: Leafward,
-    /// The candidate nodes among the vertices.
-    pub candidates: usize,
-    /// The extrema among them ([`is_extremum`]).
-    pub extrema: usize,
-}
-
-impl LinkWords {
-    /// The candidates and extrema counted.
-    pub fn census(&self) -> Census {
-        Census {
-            candidates: self.candidates,
-            extrema: self.extrema,
-        }
-    }
+    /// The candidate nodes among the vertices, and the extrema among them.
+    pub census: Census,
 }
 
 /// True when a vertex with this [`Mesh::link_code`] is a local extremum:
@@ -953,18 +941,14 @@ pub fn link_words<M: Mesh, O: VertexOrder + ?Sized>(mesh: &M, values: &O) -> Lin
     let packed = leafward::packs(0);
     let mut join = Leafward::zeroed(n, packed);
     let mut split = Leafward::zeroed(n, packed);
-    let Census {
-        candidates,
-        extrema,
-    } = with_both_words!(&mut join, &mut split, (j, s) => seed_words(mesh, values, j, s));
-    if !leafward::packs(candidates) {
+    let census = with_both_words!(&mut join, &mut split, (j, s) => seed_words(mesh, values, j, s));
+    if !leafward::packs(census.candidates) {
         (join, split) = (join.widen(), split.widen());
     }
     LinkWords {
         join,
         split,
-        candidates,
-        extrema,
+        census,
     }
 }
 
