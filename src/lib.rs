@@ -22,6 +22,7 @@ pub mod contour;
 pub mod field;
 pub mod measure;
 pub mod mesh;
+pub mod output;
 pub mod pages;
 pub mod progress;
 pub mod render;

@@ -375,18 +375,16 @@ impl Session {
         serde_json::to_string_pretty(self).unwrap_or_default()
     }
 
-    /// Writes the session to `path` (through a temporary file beside it,
-    /// so a crash never leaves half a session).
+    /// Writes the session to `path`, whole or not at all
+    /// ([`crate::output::write_whole`]): a crash never leaves half a session.
     pub fn write(&self, path: &Path) -> Result<(), SessionError> {
         let io = |source| SessionError::Io {
             path: path.into(),
             source,
         };
-        let mut tmp = path.as_os_str().to_owned();
-        tmp.push(".tmp");
-        let tmp = PathBuf::from(tmp);
-        std::fs::write(&tmp, self.to_json() + "\n").map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
+        let json = self.to_json() + "\n";
+        crate::output::write_whole(path, |out| std::io::Write::write_all(out, json.as_bytes()))
+            .map_err(io)
     }
 
     /// The volume to open for a session read from `session_path`: a

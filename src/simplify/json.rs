@@ -225,23 +225,10 @@ impl TreeDocument<'_> {
         w.write_all(b"}")
     }
 
-    /// Writes the document to `path`: to a file beside it, moved over it
-    /// once whole, so that a failed write leaves no half file (and an
-    /// older file at `path` as it was).
+    /// Writes the document to `path`, whole or not at all
+    /// ([`crate::output::write_whole`]).
     pub fn write_file(&self, path: &Path) -> std::io::Result<()> {
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(format!(".partial-{}", std::process::id()));
-        let partial = std::path::PathBuf::from(partial);
-        let written = std::fs::File::create(&partial).and_then(|file| {
-            let mut out = std::io::BufWriter::new(file);
-            self.write(&mut out)?;
-            out.into_inner().map_err(|e| e.into_error())?.sync_all()
-        });
-        let moved = written.and_then(|_| std::fs::rename(&partial, path));
-        if moved.is_err() {
-            let _ = std::fs::remove_file(&partial);
-        }
-        moved
+        crate::output::write_whole(path, |mut out| self.write(&mut out))
     }
 }
 

@@ -1,0 +1,134 @@
+//! Writing a file the user named: whole or not at all, and only ever into
+//! what the name points at.
+//!
+//! A plain file is written beside itself and moved over the old one once
+//! complete, so that a failed or interrupted write leaves the older file as
+//! it was and no half file. A name that is a link is followed, so the link
+//! stays and the file it points at is replaced. A name that is not a plain
+//! file (`/dev/null`, `/dev/stdout`, a named pipe) is written straight into:
+//! moving a file over it would replace the device itself, which for root
+//! turns `/dev/null` into a file that keeps all that is thrown away.
+
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Writes what `write` produces to `path`, whole or not at all (see the
+/// module's notes).
+pub fn write_whole(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let target = match std::fs::metadata(path) {
+        Ok(meta) if !meta.is_file() && !meta.is_dir() => {
+            // A device or a pipe: there is nothing to keep and nothing to
+            // replace; its data goes straight in.
+            let mut out = BufWriter::new(std::fs::OpenOptions::new().write(true).open(path)?);
+            write(&mut out)?;
+            return out.flush();
+        }
+        // A link is followed to the file it names, which is what changes.
+        Ok(_) => std::fs::canonicalize(path)?,
+        Err(_) => path.to_path_buf(),
+    };
+    let partial = partial_beside(&target);
+    let written = std::fs::File::create(&partial).and_then(|file| {
+        let mut out = BufWriter::new(file);
+        write(&mut out)?;
+        out.into_inner().map_err(|e| e.into_error())?.sync_all()
+    });
+    let moved = written.and_then(|_| std::fs::rename(&partial, &target));
+    if moved.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    moved
+}
+
+/// The name the new file has while it is written: beside the target, in
+/// the same folder (so the move is a rename), and this process's own.
+fn partial_beside(target: &Path) -> PathBuf {
+    let mut name = target.as_os_str().to_owned();
+    name.push(format!(".partial-{}", std::process::id()));
+    PathBuf::from(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_text(path: &Path, text: &str) -> std::io::Result<()> {
+        write_whole(path, |w| w.write_all(text.as_bytes()))
+    }
+
+    /// A plain file is replaced whole; a failed write leaves the old one
+    /// and no partial file; a missing folder is an error.
+    #[test]
+    fn a_plain_file_is_replaced_whole_or_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.json");
+        std::fs::write(&path, "old").unwrap();
+        write_text(&path, "new").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+
+        let failed = write_whole(&path, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("the writer gave up"))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+
+        assert!(write_text(&dir.path().join("no_such_dir").join("x"), "x").is_err());
+    }
+
+    /// Writing through a link changes the file it names and keeps the link.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_is_followed_and_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("real.json");
+        let link = dir.path().join("link.json");
+        std::fs::write(&file, "old").unwrap();
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        write_text(&link, "new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    /// A named pipe is written into and stays a pipe: moving a file over it
+    /// would replace it (as it would replace `/dev/null` for root).
+    #[cfg(unix)]
+    #[test]
+    fn a_named_pipe_is_written_into_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = tempfile::tempdir().unwrap();
+        let pipe = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipped: mkfifo is not available here");
+            return;
+        }
+        // The read end is opened first, without waiting for a writer, so
+        // that the write below finds a reader; and should the pipe be
+        // replaced, the read end sees no data instead of waiting forever.
+        let mut reader = {
+            use std::os::unix::fs::OpenOptionsExt;
+            std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NONBLOCK)
+                .open(&pipe)
+                .unwrap()
+        };
+        write_text(&pipe, "through the pipe").unwrap();
+        let mut read = String::new();
+        std::io::Read::read_to_string(&mut reader, &mut read).unwrap();
+        assert_eq!(read, "through the pipe");
+        assert!(std::fs::metadata(&pipe).unwrap().file_type().is_fifo());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}
