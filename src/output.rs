@@ -8,6 +8,9 @@
 //! file (`/dev/null`, `/dev/stdout`, a named pipe) is written straight into:
 //! moving a file over it would replace the device itself, which for root
 //! turns `/dev/null` into a file that keeps all that is thrown away.
+//!
+//! Every file the program writes where the user said goes through here:
+//! the tree's JSON, sessions, meshes, pictures.
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -18,18 +21,14 @@ pub fn write_whole(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
-    let target = match std::fs::metadata(path) {
-        Ok(meta) if !meta.is_file() && !meta.is_dir() => {
-            // A device or a pipe: there is nothing to keep and nothing to
-            // replace; its data goes straight in.
-            let mut out = BufWriter::new(std::fs::OpenOptions::new().write(true).open(path)?);
-            write(&mut out)?;
-            return out.flush();
-        }
-        // A link is followed to the file it names, which is what changes.
-        Ok(_) => std::fs::canonicalize(path)?,
-        Err(_) => path.to_path_buf(),
-    };
+    let target = followed(path)?;
+    if std::fs::metadata(&target).is_ok_and(|meta| !meta.is_file() && !meta.is_dir()) {
+        // A device or a pipe: there is nothing to keep and nothing to
+        // replace; the data goes straight in.
+        let mut out = BufWriter::new(std::fs::OpenOptions::new().write(true).open(&target)?);
+        write(&mut out)?;
+        return out.flush();
+    }
     let partial = partial_beside(&target);
     let written = std::fs::File::create(&partial).and_then(|file| {
         let mut out = BufWriter::new(file);
@@ -41,6 +40,38 @@ pub fn write_whole(
         let _ = std::fs::remove_file(&partial);
     }
     moved
+}
+
+/// Saves `img` to `path` in the format its extension names (PNG, JPEG,
+/// ...), whole or not at all as [`write_whole`] writes.
+pub fn save_image(path: &Path, img: &image::RgbaImage) -> image::ImageResult<()> {
+    let format = image::ImageFormat::from_path(path)?;
+    let mut encoded = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut encoded), format)?;
+    write_whole(path, |out| out.write_all(&encoded))?;
+    Ok(())
+}
+
+/// The path that `path` names once its links are followed, even to a file
+/// not made yet (a link is kept, and the file it names is what changes).
+fn followed(path: &Path) -> std::io::Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    // As many links in a row as Linux follows before it gives up.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let next = std::fs::read_link(&target)?;
+                target = match target.parent() {
+                    // A relative link is read from the link's folder; an
+                    // absolute one replaces the path.
+                    Some(folder) => folder.join(next),
+                    None => next,
+                };
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(std::io::Error::other("too many levels of links"))
 }
 
 /// The name the new file has while it is written: beside the target, in
@@ -99,6 +130,31 @@ mod tests {
         );
         assert_eq!(std::fs::read_to_string(&file).unwrap(), "new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+
+        // A link to a file not made yet, relative, through a second link.
+        let later = dir.path().join("later.json");
+        let relative = dir.path().join("relative.json");
+        let chained = dir.path().join("chained.json");
+        std::os::unix::fs::symlink("later.json", &relative).unwrap();
+        std::os::unix::fs::symlink(&relative, &chained).unwrap();
+        write_text(&chained, "made").unwrap();
+        let is_link = |p: &Path| {
+            std::fs::symlink_metadata(p)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        };
+        assert!(is_link(&chained) && is_link(&relative));
+        assert_eq!(std::fs::read_to_string(&later).unwrap(), "made");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 5);
+
+        // A loop of links is an error, not a hang.
+        let a = dir.path().join("a");
+        let b = dir.path().join("b");
+        std::os::unix::fs::symlink(&b, &a).unwrap();
+        std::os::unix::fs::symlink(&a, &b).unwrap();
+        assert!(write_text(&a, "x").is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 7);
     }
 
     /// A named pipe is written into and stays a pipe: moving a file over it

@@ -219,7 +219,7 @@ impl FlexisoApp {
                 self.export_in_background(move || {
                     crate::render::overlay::draw_labels(&mut img, &labels);
                     crate::render::overlay::draw_legend(&mut img, &legend);
-                    match img.save(&path) {
+                    match crate::output::save_image(&path, &img) {
                         Ok(()) => Ok(format!("saved {}", path.display())),
                         Err(e) => Err(format!("screenshot: {}: {e}", path.display())),
                     }

@@ -344,7 +344,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .context("cannot encode the PNG")?;
         super::write_stdout(&png)?;
     } else {
-        img.save(&args.out)
+        crate::output::save_image(&args.out, &img)
             .with_context(|| format!("{}: cannot write", args.out.display()))?;
     }
     crate::report!(r, "wrote {} ({width}x{height})", args.out.display());

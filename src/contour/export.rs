@@ -23,7 +23,7 @@
 
 use super::ContourMesh;
 use std::borrow::Borrow;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 use thiserror::Error;
 
@@ -111,11 +111,10 @@ pub fn write_contours_as(
         path: path.display().to_string(),
         error,
     };
-    let file = std::fs::File::create(path).map_err(io_err)?;
-    let mut w = BufWriter::new(file);
-    write_mesh(&mut w, format, contours, names, note)
-        .and_then(|_| w.flush())
-        .map_err(io_err)
+    crate::output::write_whole(path, |mut w| {
+        write_mesh(&mut w, format, contours, names, note)
+    })
+    .map_err(io_err)
 }
 
 /// Writes `contours` in `format` to any writer (standard output, a
@@ -508,18 +507,16 @@ pub fn write_contours_coloured(
         path: path.display().to_string(),
     })?;
     let note: String = note.chars().filter(|c| !c.is_control()).collect();
-    let write = |p: &Path, f: &dyn Fn(&mut BufWriter<std::fs::File>) -> io::Result<()>| {
-        let io_err = |error| ExportError::Io {
+    let write = |p: &Path, f: &dyn Fn(&mut dyn Write) -> io::Result<()>| {
+        crate::output::write_whole(p, |w| f(w)).map_err(|error| ExportError::Io {
             path: p.display().to_string(),
             error,
-        };
-        let mut w = BufWriter::new(std::fs::File::create(p).map_err(io_err)?);
-        f(&mut w).and_then(|_| w.flush()).map_err(io_err)
+        })
     };
     match format {
         MeshFormat::Ply => {
-            write(path, &|w| {
-                write_ply_coloured(w, contours, names, colours, &note)
+            write(path, &|mut w| {
+                write_ply_coloured(&mut w, contours, names, colours, &note)
             })?;
             Ok(vec![path.to_path_buf()])
         }
@@ -529,9 +526,9 @@ pub fn write_contours_coloured(
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "contours.mtl".into());
-            write(&mtl, &|w| write_mtl(w, names, colours))?;
-            write(path, &|w| {
-                write_obj_with_materials(w, contours, names, Some(&lib), &note)
+            write(&mtl, &|mut w| write_mtl(&mut w, names, colours))?;
+            write(path, &|mut w| {
+                write_obj_with_materials(&mut w, contours, names, Some(&lib), &note)
             })?;
             Ok(vec![path.to_path_buf(), mtl])
         }
