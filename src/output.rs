@@ -7,7 +7,8 @@
 //! stays and the file it points at is replaced. A name that is not a plain
 //! file (`/dev/null`, `/dev/stdout`, a named pipe) is written straight into:
 //! moving a file over it would replace the device itself, which for root
-//! turns `/dev/null` into a file that keeps all that is thrown away.
+//! turns `/dev/null` into a file that keeps all that is thrown away. A new
+//! file keeps the permissions of the one it replaces.
 //!
 //! Every file the program writes where the user said goes through here:
 //! the tree's JSON, sessions, meshes, pictures.
@@ -21,16 +22,21 @@ pub fn write_whole(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
-    let target = followed(path)?;
-    if std::fs::metadata(&target).is_ok_and(|meta| !meta.is_file() && !meta.is_dir()) {
-        // A device or a pipe: there is nothing to keep and nothing to
-        // replace; the data goes straight in.
-        let mut out = BufWriter::new(std::fs::OpenOptions::new().write(true).open(&target)?);
+    if is_not_a_place(path) {
+        // A device, a pipe or an open file: there is nothing to keep and
+        // nothing to replace; the data goes straight in, after what is
+        // there (`>>` stays `>>`).
+        let mut out = BufWriter::new(std::fs::OpenOptions::new().append(true).open(path)?);
         write(&mut out)?;
         return out.flush();
     }
+    let target = followed(path)?;
     let partial = partial_beside(&target);
     let written = std::fs::File::create(&partial).and_then(|file| {
+        // The new file keeps the old one's permissions.
+        if let Ok(old) = std::fs::metadata(&target) {
+            file.set_permissions(old.permissions())?;
+        }
         let mut out = BufWriter::new(file);
         write(&mut out)?;
         out.into_inner().map_err(|e| e.into_error())?.sync_all()
@@ -50,6 +56,20 @@ pub fn save_image(path: &Path, img: &image::RgbaImage) -> image::ImageResult<()>
     img.write_to(&mut std::io::Cursor::new(&mut encoded), format)?;
     write_whole(path, |out| out.write_all(&encoded))?;
     Ok(())
+}
+
+/// Whether `path` names something that is not a place for a file: a
+/// device or a pipe (`/dev/null`, a named pipe), or one of the system's
+/// names of a file already open (`/dev/stdout`, `/dev/fd/N`,
+/// `/proc/self/fd/N`), perhaps a pipe that has no path at all.
+fn is_not_a_place(path: &Path) -> bool {
+    let special = std::fs::metadata(path).is_ok_and(|meta| !meta.is_file() && !meta.is_dir());
+    let open_file = ["/dev/stdout", "/dev/stderr"]
+        .iter()
+        .any(|name| path.as_os_str() == *name)
+        || path.starts_with("/dev/fd")
+        || path.starts_with("/proc");
+    special || open_file
 }
 
 /// The path that `path` names once its links are followed, even to a file

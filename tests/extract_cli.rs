@@ -280,6 +280,18 @@ fn tree_json_to_stdout_carries_only_the_json_and_the_report_goes_to_stderr() {
     // And without -: the report on stdout, as before.
     let plain = flexiso(&["tree", "synthetic:12"]);
     assert!(plain.stdout.contains("superarcs:") && plain.stderr.is_empty());
+    // The system's names of standard output are standard output, as `-`
+    // is: the JSON alone there, the report on stderr.
+    for name in ["/dev/stdout", "/dev/fd/1"] {
+        let named = flexiso(&["tree", "synthetic:12", "--json", name]);
+        assert!(named.success(), "{name}: {}", named.stderr);
+        assert_eq!(named.stdout, o.stdout, "{name}");
+        assert!(
+            named.stderr.contains("superarcs:"),
+            "{name}: {}",
+            named.stderr
+        );
+    }
 }
 
 /// `--json` writes its document element by element (a node or an arc at a

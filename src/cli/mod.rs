@@ -75,9 +75,14 @@ pub fn quiet() -> bool {
     QUIET.load(Ordering::Relaxed)
 }
 
-/// True when `path` is `-` (standard output or input).
+/// True when the output `path` is standard output: `-`, or one of the
+/// names the system gives it (`/dev/stdout`, `/dev/fd/1`,
+/// `/proc/self/fd/1`), so that it is written as `-` is (the report on
+/// standard error, a reader that stops early not an error).
 pub fn is_stdio(path: &Path) -> bool {
-    path.as_os_str() == "-"
+    ["-", "/dev/stdout", "/dev/fd/1", "/proc/self/fd/1"]
+        .iter()
+        .any(|name| path.as_os_str() == *name)
 }
 
 /// Where a command's report goes: standard output, or standard error when
