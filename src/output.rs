@@ -111,15 +111,28 @@ mod tests {
         write_whole(path, |w| w.write_all(text.as_bytes()))
     }
 
-    /// A plain file is replaced whole; a failed write leaves the old one
-    /// and no partial file; a missing folder is an error.
+    /// A plain file is replaced whole, keeping its permissions; a failed
+    /// write leaves the old one and no partial file; a missing folder is an
+    /// error.
     #[test]
     fn a_plain_file_is_replaced_whole_or_kept() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.json");
         std::fs::write(&path, "old").unwrap();
+        #[cfg(unix)]
+        let mode = |p: &Path| {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::metadata(p).unwrap().permissions().mode() & 0o777
+        };
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o640)).unwrap();
+        }
         write_text(&path, "new").unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        #[cfg(unix)]
+        assert_eq!(mode(&path), 0o640, "the old file's permissions are kept");
 
         let failed = write_whole(&path, |w| {
             w.write_all(b"half")?;
