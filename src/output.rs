@@ -11,7 +11,9 @@
 //! file keeps the permissions of the one it replaces.
 //!
 //! Every file the program writes where the user said goes through here:
-//! the tree's JSON, sessions, meshes, pictures.
+//! the tree's JSON, sessions, meshes, pictures, the benchmark's CSV. (The
+//! explorer's frame log, written line by line while it runs, is not a
+//! file made whole.)
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

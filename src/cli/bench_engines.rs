@@ -160,31 +160,36 @@ pub fn run(args: &Volumes<'_>, sizes: &[usize], csv: Option<&PathBuf>) -> anyhow
         }
     }
     if let Some(path) = csv {
-        let mut f = std::fs::File::create(path)
+        crate::output::write_whole(path, |f| write_csv(f, &rows))
             .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The rows as CSV, a header first.
+fn write_csv(f: &mut dyn Write, rows: &[Row]) -> std::io::Result<()> {
+    writeln!(
+        f,
+        "family,name,vertices,nodes,csa_s,rs_s,csa_comparisons,rs_links,rs_paint,rs_number,rs_locate,rs_arc_sort,shape_term"
+    )?;
+    for r in rows {
         writeln!(
             f,
-            "family,name,vertices,nodes,csa_s,rs_s,csa_comparisons,rs_links,rs_paint,rs_number,rs_locate,rs_arc_sort,shape_term"
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},{},{:.1}",
+            r.family,
+            r.name,
+            r.n,
+            r.nodes,
+            r.engine_s,
+            r.rs_s,
+            r.engine_cmp,
+            r.rs.links,
+            r.rs.paint,
+            r.rs.number,
+            r.rs.locate,
+            r.rs.arc_sort,
+            r.shape
         )?;
-        for r in &rows {
-            writeln!(
-                f,
-                "{},{},{},{},{:.4},{:.4},{},{},{},{},{},{},{:.1}",
-                r.family,
-                r.name,
-                r.n,
-                r.nodes,
-                r.engine_s,
-                r.rs_s,
-                r.engine_cmp,
-                r.rs.links,
-                r.rs.paint,
-                r.rs.number,
-                r.rs.locate,
-                r.rs.arc_sort,
-                r.shape
-            )?;
-        }
     }
     Ok(())
 }
