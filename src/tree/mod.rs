@@ -68,8 +68,7 @@
 //! [`sweep::Census::supernodes_at_most`], 0.1-2 % above the real number on
 //! the shared scans; half the candidates before session 42), and
 //! [`check_merge_memory`] again with their real number once the sweeps are
-//! done. The
-//! finished tree keeps 7 bytes per vertex (`vertex_arc` in 3, and
+//! done. The finished tree keeps 7 bytes per vertex (`vertex_arc` in 3, and
 //! `arc_vertices` 4 per regular vertex; 8 where the records did not pack)
 //! plus 28 per supernode: 11.15 on tooth. Keeping the places in 3 bytes
 //! (session 38) took the peaks of `flexiso bench` about a byte per vertex
@@ -279,8 +278,8 @@ impl From<Cancelled> for BuildError {
 /// [`crate::field::order_bytes`]), before the sweeps tell how many of the
 /// candidates are supernodes: at most twice the extrema
 /// ([`sweep::Census::supernodes_at_most`]; [`check_merge_memory`] checks
-/// again with the real number). The order, the two sweeps' records and 16 per candidate while
-/// sweeping; then the order unless it is let go (`order`, see
+/// again with the real number). The order, the two sweeps' records and
+/// 16 per candidate while sweeping; then the order unless it is let go (`order`, see
 /// [`order_at_merge`]) and, at the merge, the records and the candidates'
 /// tables ([`merge_table_bytes`]); at the grouping the order (made again if
 /// it was let go), `vertex_arc` and the arcs' vertex lists
