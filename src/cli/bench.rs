@@ -7,7 +7,12 @@
 //! Peak memory is the process's peak resident set (VmHWM), reset before each
 //! dataset through /proc/self/clear_refs; "engine B/vertex" is that peak
 //! minus the resident set once the values are loaded, over the vertex count:
-//! what the contour tree costs beyond the input.
+//! what the contour tree costs beyond the input. Before each build the
+//! allocator hands its free pages back ([`crate::pages::trim_freed`]): pages
+//! an earlier build or repeat freed but kept would be reused unseen and
+//! lower the figure by up to 1.5 bytes per vertex (colin27_ch2 read 8.3 or
+//! 9.8 by which repeat was fastest), so the figure is close to what a fresh
+//! process pays.
 //!
 //! After the tree come the columns of simplification: arcs left once
 //! zero-height arcs are collapsed, seconds to the measures (hypervolume)
@@ -281,6 +286,7 @@ fn is_volume(p: &std::path::Path) -> bool {
 pub fn bench_field(name: &str, field: &ScalarField, load: Duration, repeat: usize) -> Row {
     let mut best: Option<Row> = None;
     for _ in 0..repeat {
+        crate::pages::trim_freed();
         reset_peak_rss();
         let base = current_rss();
         let cpu = process_cpu();
