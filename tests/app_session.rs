@@ -53,17 +53,20 @@ fn scene(h: &Harness<'_, FlexisoApp>) -> Vec<ContourState> {
     h.state().selection().states()
 }
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("flexiso-session-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temp dir");
-    dir.join(name)
+/// A folder of the test's own, removed when it ends.
+fn scratch() -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix("flexiso-session-test-")
+        .tempdir()
+        .expect("a temp dir")
 }
 
 #[test]
 fn a_saved_session_opens_as_the_identical_scene() {
+    let dir = scratch();
     let mut h = explorer();
     compose(&mut h);
-    let path = tmp("roundtrip.json");
+    let path = dir.path().join("roundtrip.json");
     assert!(h.state().unsaved_changes());
     h.state_mut().save_session(&path).expect("saved");
     assert!(!h.state().unsaved_changes(), "saved");
@@ -104,9 +107,10 @@ fn a_saved_session_opens_as_the_identical_scene() {
 
 #[test]
 fn a_session_on_a_changed_volume_opens_what_it_can_and_says_what_it_could_not() {
+    let dir = scratch();
     let mut h = explorer();
     compose(&mut h);
-    let path = tmp("changed.json");
+    let path = dir.path().join("changed.json");
     h.state_mut().save_session(&path).expect("saved");
     let mut s = Session::read(&path).expect("a session");
     s.contours[1].superarc = [u32::MAX, 7];
@@ -126,14 +130,15 @@ fn a_session_on_a_changed_volume_opens_what_it_can_and_says_what_it_could_not() 
 
 #[test]
 fn a_bad_session_file_shows_an_error() {
+    let dir = scratch();
     let mut g = fresh();
-    let path = tmp("bad.json");
+    let path = dir.path().join("bad.json");
     std::fs::write(&path, r#"{"format": "something-else"}"#).expect("written");
     g.state_mut().open_session(&path);
     g.run_steps(2);
     let e = g.state().error().expect("an error");
     assert!(e.contains("flexiso-session"), "{e}");
-    g.state_mut().open_session(&tmp("missing.json"));
+    g.state_mut().open_session(&dir.path().join("missing.json"));
     assert!(
         g.state()
             .error()
@@ -143,7 +148,8 @@ fn a_bad_session_file_shows_an_error() {
 
 #[test]
 fn after_a_crash_the_recovery_file_is_offered_and_restores_the_scene() {
-    let path = tmp("recovery.json");
+    let dir = scratch();
+    let path = dir.path().join("recovery.json");
     let _ = std::fs::remove_file(&path);
     let mut h = explorer();
     h.state_mut().set_recovery_file(path.clone());
@@ -172,7 +178,47 @@ fn after_a_crash_the_recovery_file_is_offered_and_restores_the_scene() {
 }
 
 #[test]
+fn the_recovery_file_is_written_off_the_ui_thread() {
+    // A recovery file that cannot be written until someone reads it: a
+    // named pipe, as a stalled network disk would be.
+    let dir = scratch();
+    let pipe = dir.path().join("recovery.json");
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: mkfifo is not available here");
+        return;
+    }
+    // The reader opens the pipe when told, or after 20 s should the
+    // write hold the test's thread (the bug this test is for).
+    let (go, wait) = std::sync::mpsc::channel::<()>();
+    let reader = {
+        let pipe = pipe.clone();
+        std::thread::spawn(move || {
+            let _ = wait.recv_timeout(std::time::Duration::from_secs(20));
+            std::fs::read_to_string(&pipe).expect("the pipe read")
+        })
+    };
+    let mut h = explorer();
+    h.state_mut().set_recovery_file(pipe.clone());
+    assert!(!h.state().recovery_offered(), "a pipe is not offered");
+    compose(&mut h);
+    let t = std::time::Instant::now();
+    h.state_mut().autosave_later();
+    h.run_steps(2);
+    let held = t.elapsed();
+    go.send(()).expect("the reader waits");
+    let written = reader.join().expect("the reader");
+    assert!(
+        held < std::time::Duration::from_secs(10),
+        "the window waited {held:?} for the recovery file"
+    );
+    let s = Session::from_json(&written, &pipe).expect("a whole session");
+    assert_eq!(s.contours.len(), 2);
+}
+
+#[test]
 fn without_a_system_dialog_a_typed_path_saves_the_session() {
+    let dir = scratch();
     // SAFETY: this test binary's other tests neither read nor write the
     // environment.
     unsafe { std::env::set_var("FLEXISO_NO_DIALOG", "1") };
@@ -191,7 +237,7 @@ fn without_a_system_dialog_a_typed_path_saves_the_session() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     assert!(asked, "the typed-path window shows");
-    let path = tmp("typed.json");
+    let path = dir.path().join("typed.json");
     let _ = std::fs::remove_file(&path);
     h.get_by_label("Path:").click();
     h.run_steps(1);
@@ -214,12 +260,13 @@ fn without_a_system_dialog_a_typed_path_saves_the_session() {
 
 #[test]
 fn render_session_draws_each_visible_contour_in_its_colour() {
+    let dir = scratch();
     if common::gpu().is_none() {
         return;
     }
     let mut h = explorer();
     compose(&mut h);
-    let path = tmp("render.json");
+    let path = dir.path().join("render.json");
     h.state_mut().save_session(&path).expect("saved");
     let mut s = Session::read(&path).expect("a session");
     // Both shown, in two colours far from the grey background.
@@ -228,7 +275,7 @@ fn render_session_draws_each_visible_contour_in_its_colour() {
     s.contours[1].visible = true;
     s.camera = None;
     s.write(&path).expect("written");
-    let png = tmp("render.png");
+    let png = dir.path().join("render.png");
     let out = common::flexiso(&[
         "render",
         "--session",
@@ -251,13 +298,14 @@ fn render_session_draws_each_visible_contour_in_its_colour() {
 
 #[test]
 fn an_export_with_the_session_ticked_writes_it_beside_the_meshes() {
+    let dir = scratch();
     let mut h = explorer();
     compose(&mut h);
     h.get_by_label("File").click();
     h.run_steps(2);
     h.get_by_label("…and a session beside the meshes").click();
     h.run_steps(2);
-    let ply = tmp("beside.ply");
+    let ply = dir.path().join("beside.ply");
     let beside = FlexisoApp::session_beside(&ply);
     assert_eq!(beside, ply.with_extension("session.json"));
     let _ = std::fs::remove_file(&beside);

@@ -2,7 +2,9 @@
 //! Save session / Open session, the question asked before a scene with
 //! unsaved changes is closed (quitting, closing the window, opening
 //! another volume), and the recovery file written every few seconds of
-//! change and offered at the next start after a crash.
+//! change and offered at the next start after a crash. The recovery file
+//! is written on a thread of its own ([`RecoveryWriter`]): the frame only
+//! takes the scene as a session value.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -39,6 +41,88 @@ pub struct Recovery {
     path: PathBuf,
     written: Option<Scene>,
     changed_at: Option<Instant>,
+    writer: RecoveryWriter,
+}
+
+/// What the recovery file's writer is asked to do.
+enum FileOp {
+    Write(Box<Session>),
+    Remove,
+}
+
+/// The recovery file's writer: a thread of its own, so that a slow or
+/// network disk (the write is synced, [`crate::output::write_whole`])
+/// never holds the window. Writes and removals happen in the order asked;
+/// where several wait, only the last is done, since each leaves the file
+/// as a whole.
+struct RecoveryWriter {
+    asks: std::sync::mpsc::Sender<FileOp>,
+    /// Operations asked so far; the thread counts those it has finished.
+    asked: u64,
+    done: std::sync::Arc<(std::sync::Mutex<u64>, std::sync::Condvar)>,
+}
+
+impl std::fmt::Debug for RecoveryWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RecoveryWriter")
+            .field("asked", &self.asked)
+            .finish_non_exhaustive()
+    }
+}
+
+impl RecoveryWriter {
+    fn new(path: PathBuf) -> Self {
+        let (asks, inbox) = std::sync::mpsc::channel::<FileOp>();
+        let done = std::sync::Arc::new((std::sync::Mutex::new(0u64), std::sync::Condvar::new()));
+        let finished = done.clone();
+        let spawned = std::thread::Builder::new()
+            .name("recovery file".into())
+            .spawn(move || {
+                while let Ok(first) = inbox.recv() {
+                    let (mut last, mut count) = (first, 1);
+                    while let Ok(later) = inbox.try_recv() {
+                        (last, count) = (later, count + 1);
+                    }
+                    match last {
+                        FileOp::Write(s) => {
+                            if let Some(dir) = path.parent() {
+                                let _ = std::fs::create_dir_all(dir);
+                            }
+                            if let Err(e) = s.write(&path) {
+                                eprintln!("flexiso: cannot write the recovery file: {e}");
+                            }
+                        }
+                        FileOp::Remove => {
+                            let _ = std::fs::remove_file(&path);
+                        }
+                    }
+                    let (n, cv) = &*finished;
+                    *n.lock().unwrap_or_else(|p| p.into_inner()) += count;
+                    cv.notify_all();
+                }
+            });
+        if let Err(e) = spawned {
+            eprintln!("flexiso: no thread for the recovery file, it will not be written: {e}");
+        }
+        Self {
+            asks,
+            asked: 0,
+            done,
+        }
+    }
+
+    fn ask(&mut self, op: FileOp) {
+        if self.asks.send(op).is_ok() {
+            self.asked += 1;
+        }
+    }
+
+    /// Waits, at most `limit`, until everything asked is done.
+    fn wait(&self, limit: Duration) {
+        let (n, cv) = &*self.done;
+        let guard = n.lock().unwrap_or_else(|p| p.into_inner());
+        let _ = cv.wait_timeout_while(guard, limit, |n| *n < self.asked);
+    }
 }
 
 impl Recovery {
@@ -425,7 +509,8 @@ impl FlexisoApp {
     /// from now on; a file already there (a run that crashed) is offered.
     pub fn set_recovery_file(&mut self, path: PathBuf) {
         self.recovery_offer = None;
-        if path.exists() {
+        // A plain file only: reading a named pipe or a device would wait.
+        if path.is_file() {
             match Session::read(&path) {
                 Ok(s) if !s.contours.is_empty() => {
                     self.recovery_offer = Some(s);
@@ -435,6 +520,7 @@ impl FlexisoApp {
             }
         }
         self.recovery = Some(Recovery {
+            writer: RecoveryWriter::new(path.clone()),
             path,
             written: None,
             changed_at: None,
@@ -446,9 +532,12 @@ impl FlexisoApp {
         self.recovery_offer.is_some()
     }
 
+    /// Removes the recovery file, after any write still under way; waits
+    /// for it (a second at most), since the program may be closing.
     fn remove_recovery(&mut self) {
-        if let Some(r) = &self.recovery {
-            let _ = std::fs::remove_file(&r.path);
+        if let Some(r) = &mut self.recovery {
+            r.writer.ask(FileOp::Remove);
+            r.writer.wait(Duration::from_secs(1));
         }
     }
 
@@ -473,21 +562,31 @@ impl FlexisoApp {
         r.written = scene;
         r.changed_at = None;
         if !unsaved {
-            let _ = std::fs::remove_file(&path);
+            r.writer.ask(FileOp::Remove);
             return;
         }
-        if let Some(s) = self.session(&path) {
-            if let Some(dir) = path.parent() {
-                let _ = std::fs::create_dir_all(dir);
-            }
-            if let Err(e) = s.write(&path) {
-                eprintln!("flexiso: cannot write the recovery file: {e}");
-            }
+        // The session is taken here (a small value); encoding and the
+        // synced write happen on the writer's thread.
+        if let Some(s) = self.session(&path)
+            && let Some(r) = &mut self.recovery
+        {
+            r.writer.ask(FileOp::Write(Box::new(s)));
         }
     }
 
-    /// Writes the recovery file now if the scene changed (tests).
+    /// Writes the recovery file now if the scene changed, and waits for
+    /// the write (tests).
     pub fn autosave_now(&mut self) {
+        self.autosave_later();
+        if let Some(r) = &self.recovery {
+            r.writer.wait(Duration::from_secs(10));
+        }
+    }
+
+    /// Asks for the recovery file to be written now if the scene changed,
+    /// as the frame does after [`AUTOSAVE_AFTER`], and returns at once
+    /// (tests).
+    pub fn autosave_later(&mut self) {
         if let Some(r) = &mut self.recovery {
             r.changed_at = Some(Instant::now() - AUTOSAVE_AFTER);
         }
