@@ -3,7 +3,7 @@
 //! unsaved changes is closed (quitting, closing the window, opening
 //! another volume), and the recovery file written every few seconds of
 //! change and offered at the next start after a crash. The recovery file
-//! is written on a thread of its own ([`RecoveryWriter`]): the frame only
+//! is written on a thread of its own (`RecoveryWriter`): the frame only
 //! takes the scene as a session value.
 
 use std::path::{Path, PathBuf};
