@@ -217,6 +217,23 @@ fn the_recovery_file_is_written_off_the_ui_thread() {
 }
 
 #[test]
+fn a_recovery_file_that_cannot_be_written_is_shown_as_an_error() {
+    // Its folder would be inside a plain file: no write can succeed.
+    let dir = scratch();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "not a folder").expect("written");
+    let mut h = explorer();
+    h.state_mut().set_recovery_file(file.join("recovery.json"));
+    compose(&mut h);
+    assert_eq!(h.state().error(), None);
+    h.state_mut().autosave_now();
+    h.run_steps(2);
+    let e = h.state().error().expect("an error shown");
+    assert!(e.contains("recovery file"), "{e}");
+    assert!(e.contains("save the session"), "{e}");
+}
+
+#[test]
 fn without_a_system_dialog_a_typed_path_saves_the_session() {
     let dir = scratch();
     // SAFETY: this test binary's other tests neither read nor write the

@@ -42,6 +42,8 @@ pub struct Recovery {
     written: Option<Scene>,
     changed_at: Option<Instant>,
     writer: RecoveryWriter,
+    /// The writer's failure last shown to the user.
+    reported: Option<String>,
 }
 
 /// What the recovery file's writer is asked to do.
@@ -60,6 +62,8 @@ struct RecoveryWriter {
     /// Operations asked so far; the thread counts those it has finished.
     asked: u64,
     done: std::sync::Arc<(std::sync::Mutex<u64>, std::sync::Condvar)>,
+    /// Why the last write failed, until one succeeds.
+    failure: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 impl std::fmt::Debug for RecoveryWriter {
@@ -75,6 +79,8 @@ impl RecoveryWriter {
         let (asks, inbox) = std::sync::mpsc::channel::<FileOp>();
         let done = std::sync::Arc::new((std::sync::Mutex::new(0u64), std::sync::Condvar::new()));
         let finished = done.clone();
+        let failure = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let failed = failure.clone();
         let spawned = std::thread::Builder::new()
             .name("recovery file".into())
             .spawn(move || {
@@ -83,19 +89,25 @@ impl RecoveryWriter {
                     while let Ok(later) = inbox.try_recv() {
                         (last, count) = (later, count + 1);
                     }
-                    match last {
+                    let outcome = match last {
                         FileOp::Write(s) => {
                             if let Some(dir) = path.parent() {
                                 let _ = std::fs::create_dir_all(dir);
                             }
-                            if let Err(e) = s.write(&path) {
+                            s.write(&path).err().map(|e| {
                                 eprintln!("flexiso: cannot write the recovery file: {e}");
-                            }
+                                format!(
+                                    "the recovery file cannot be written ({e}): save the \
+                                     session to keep this scene"
+                                )
+                            })
                         }
                         FileOp::Remove => {
                             let _ = std::fs::remove_file(&path);
+                            None
                         }
-                    }
+                    };
+                    *failed.lock().unwrap_or_else(|p| p.into_inner()) = outcome;
                     let (n, cv) = &*finished;
                     *n.lock().unwrap_or_else(|p| p.into_inner()) += count;
                     cv.notify_all();
@@ -108,7 +120,16 @@ impl RecoveryWriter {
             asks,
             asked: 0,
             done,
+            failure,
         }
+    }
+
+    /// Why the last write failed, until one succeeds.
+    fn failure(&self) -> Option<String> {
+        self.failure
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
     }
 
     fn ask(&mut self, op: FileOp) {
@@ -524,6 +545,7 @@ impl FlexisoApp {
             path,
             written: None,
             changed_at: None,
+            reported: None,
         });
     }
 
@@ -542,8 +564,20 @@ impl FlexisoApp {
     }
 
     /// Writes the recovery file once the scene has stayed changed for
-    /// [`AUTOSAVE_AFTER`]; removes it when nothing is unsaved.
+    /// [`AUTOSAVE_AFTER`]; removes it when nothing is unsaved. Shows a
+    /// failed write.
     pub(super) fn autosave(&mut self, now: Instant) {
+        // A write that failed is shown once, as an error: the scene is not
+        // kept against a crash until a write succeeds.
+        if let Some(r) = &mut self.recovery {
+            let failure = r.writer.failure();
+            if failure != r.reported {
+                if failure.is_some() {
+                    self.error.clone_from(&failure);
+                }
+                r.reported = failure;
+            }
+        }
         if self.recovery_offer.is_some() {
             return; // The old file waits for the user's answer.
         }
