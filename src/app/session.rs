@@ -3,8 +3,8 @@
 //! unsaved changes is closed (quitting, closing the window, opening
 //! another volume), and the recovery file written every few seconds of
 //! change and offered at the next start after a crash. The recovery file
-//! is written on a thread of its own (`RecoveryWriter`): the frame only
-//! takes the scene as a session value.
+//! is written by a [`Job`]: the frame only takes the scene as a session
+//! value.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -14,6 +14,7 @@ use egui::{Color32, RichText};
 use super::FlexisoApp;
 use super::history::Scene;
 use super::ids::ContourId;
+use super::jobs::{Job, JobError};
 use super::selection::{ContourState, palette};
 use crate::session::{
     CameraState, Session, SessionClip, SessionContour, SessionCutBox, SessionSlices, SessionView,
@@ -41,112 +42,69 @@ pub struct Recovery {
     path: PathBuf,
     written: Option<Scene>,
     changed_at: Option<Instant>,
-    writer: RecoveryWriter,
-    /// The writer's failure last shown to the user.
-    reported: Option<String>,
-}
-
-/// What the recovery file's writer is asked to do.
-enum FileOp {
-    Write(Box<Session>),
-    Remove,
-}
-
-/// The recovery file's writer: a thread of its own, so that a slow or
-/// network disk (the write is synced, [`crate::output::write_whole`])
-/// never holds the window. Writes and removals happen in the order asked;
-/// where several wait, only the last is done, since each leaves the file
-/// as a whole.
-struct RecoveryWriter {
-    asks: std::sync::mpsc::Sender<FileOp>,
-    /// Operations asked so far; the thread counts those it has finished.
-    asked: u64,
-    done: std::sync::Arc<(std::sync::Mutex<u64>, std::sync::Condvar)>,
-    /// Why the last write failed, until one succeeds.
-    failure: std::sync::Arc<std::sync::Mutex<Option<String>>>,
-}
-
-impl std::fmt::Debug for RecoveryWriter {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RecoveryWriter")
-            .field("asked", &self.asked)
-            .finish_non_exhaustive()
-    }
-}
-
-impl RecoveryWriter {
-    fn new(path: PathBuf) -> Self {
-        let (asks, inbox) = std::sync::mpsc::channel::<FileOp>();
-        let done = std::sync::Arc::new((std::sync::Mutex::new(0u64), std::sync::Condvar::new()));
-        let finished = done.clone();
-        let failure = std::sync::Arc::new(std::sync::Mutex::new(None));
-        let failed = failure.clone();
-        let spawned = std::thread::Builder::new()
-            .name("recovery file".into())
-            .spawn(move || {
-                while let Ok(first) = inbox.recv() {
-                    let (mut last, mut count) = (first, 1);
-                    while let Ok(later) = inbox.try_recv() {
-                        (last, count) = (later, count + 1);
-                    }
-                    let outcome = match last {
-                        FileOp::Write(s) => {
-                            if let Some(dir) = path.parent() {
-                                let _ = std::fs::create_dir_all(dir);
-                            }
-                            s.write(&path).err().map(|e| {
-                                eprintln!("flexiso: cannot write the recovery file: {e}");
-                                format!(
-                                    "the recovery file cannot be written ({e}): save the \
-                                     session to keep this scene"
-                                )
-                            })
-                        }
-                        FileOp::Remove => {
-                            let _ = std::fs::remove_file(&path);
-                            None
-                        }
-                    };
-                    *failed.lock().unwrap_or_else(|p| p.into_inner()) = outcome;
-                    let (n, cv) = &*finished;
-                    *n.lock().unwrap_or_else(|p| p.into_inner()) += count;
-                    cv.notify_all();
-                }
-            });
-        if let Err(e) = spawned {
-            eprintln!("flexiso: no thread for the recovery file, it will not be written: {e}");
-        }
-        Self {
-            asks,
-            asked: 0,
-            done,
-            failure,
-        }
-    }
-
-    /// Why the last write failed, until one succeeds.
-    fn failure(&self) -> Option<String> {
-        self.failure
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .clone()
-    }
-
-    fn ask(&mut self, op: FileOp) {
-        if self.asks.send(op).is_ok() {
-            self.asked += 1;
-        }
-    }
-
-    /// Waits, at most `limit`, until everything asked is done.
-    fn wait(&self, limit: Duration) {
-        let (n, cv) = &*self.done;
-        let guard = n.lock().unwrap_or_else(|p| p.into_inner());
-        let _ = cv.wait_timeout_while(guard, limit, |n| *n < self.asked);
-    }
+    /// Its writes and removals, off the UI thread (the write is synced,
+    /// [`crate::output::write_whole`], and a slow or stalled disk must not
+    /// hold the window): one at a time, in the order asked, the latest
+    /// waiting replacing any before it ([`Job::start_latest`]), since each
+    /// leaves the file whole.
+    job: Job<()>,
+    /// The last write failed (and was shown): the next failure is not
+    /// shown again until a write succeeds.
+    failing: bool,
 }
 
 impl Recovery {
+    fn write(&mut self, session: Session) {
+        let path = self.path.clone();
+        self.job.start_latest("recovery file", move |_| {
+            if let Some(dir) = path.parent() {
+                let _ = std::fs::create_dir_all(dir);
+            }
+            session.write(&path).map_err(|e| {
+                eprintln!("flexiso: cannot write the recovery file: {e}");
+                JobError::Write(format!(
+                    "the recovery file cannot be written ({e}): save the session to keep \
+                     this scene"
+                ))
+            })
+        });
+    }
+
+    fn remove(&mut self) {
+        let path = self.path.clone();
+        self.job.start_latest("recovery file", move |_| {
+            let _ = std::fs::remove_file(&path);
+            Ok(())
+        });
+    }
+
+    /// Installs a finished write or removal (and starts the one waiting);
+    /// a failure to show, the first of a run of them.
+    fn poll(&mut self) -> Option<String> {
+        match self.job.poll_take()? {
+            Err(JobError::Write(e)) => (!std::mem::replace(&mut self.failing, true)).then_some(e),
+            _ => {
+                self.failing = false;
+                None
+            }
+        }
+    }
+
+    /// Waits, at most `limit`, until every write and removal asked is
+    /// done; a failure to show.
+    fn finish(&mut self, limit: Duration) -> Option<String> {
+        let deadline = Instant::now() + limit;
+        let mut failure = None;
+        loop {
+            // What has finished is installed and what waits is started.
+            failure = failure.or(self.poll());
+            let left = deadline.saturating_duration_since(Instant::now());
+            if !self.job.is_running() || !self.job.wait_for(left) {
+                return failure;
+            }
+        }
+    }
+
     /// The recovery file's usual place: `$XDG_STATE_HOME/flexiso` (or
     /// `~/.local/state/flexiso`), `recovery.json`.
     pub fn default_path() -> Option<PathBuf> {
@@ -541,11 +499,11 @@ impl FlexisoApp {
             }
         }
         self.recovery = Some(Recovery {
-            writer: RecoveryWriter::new(path.clone()),
             path,
             written: None,
             changed_at: None,
-            reported: None,
+            job: Job::new(self.notify.clone()),
+            failing: false,
         });
     }
 
@@ -558,8 +516,8 @@ impl FlexisoApp {
     /// for it (a second at most), since the program may be closing.
     fn remove_recovery(&mut self) {
         if let Some(r) = &mut self.recovery {
-            r.writer.ask(FileOp::Remove);
-            r.writer.wait(Duration::from_secs(1));
+            r.remove();
+            r.finish(Duration::from_secs(1));
         }
     }
 
@@ -567,16 +525,10 @@ impl FlexisoApp {
     /// [`AUTOSAVE_AFTER`]; removes it when nothing is unsaved. Shows a
     /// failed write.
     pub(super) fn autosave(&mut self, now: Instant) {
-        // A write that failed is shown once, as an error: the scene is not
-        // kept against a crash until a write succeeds.
-        if let Some(r) = &mut self.recovery {
-            let failure = r.writer.failure();
-            if failure != r.reported {
-                if failure.is_some() {
-                    self.error.clone_from(&failure);
-                }
-                r.reported = failure;
-            }
+        // A write that failed is shown, as an error: the scene is not kept
+        // against a crash until a write succeeds.
+        if let Some(e) = self.recovery.as_mut().and_then(Recovery::poll) {
+            self.error = Some(e);
         }
         if self.recovery_offer.is_some() {
             return; // The old file waits for the user's answer.
@@ -596,15 +548,15 @@ impl FlexisoApp {
         r.written = scene;
         r.changed_at = None;
         if !unsaved {
-            r.writer.ask(FileOp::Remove);
+            r.remove();
             return;
         }
         // The session is taken here (a small value); encoding and the
-        // synced write happen on the writer's thread.
+        // synced write happen on the job's thread.
         if let Some(s) = self.session(&path)
             && let Some(r) = &mut self.recovery
         {
-            r.writer.ask(FileOp::Write(Box::new(s)));
+            r.write(s);
         }
     }
 
@@ -612,8 +564,12 @@ impl FlexisoApp {
     /// the write (tests).
     pub fn autosave_now(&mut self) {
         self.autosave_later();
-        if let Some(r) = &self.recovery {
-            r.writer.wait(Duration::from_secs(10));
+        if let Some(e) = self
+            .recovery
+            .as_mut()
+            .and_then(|r| r.finish(Duration::from_secs(10)))
+        {
+            self.error = Some(e);
         }
     }
 

@@ -278,16 +278,32 @@ impl<T: Send + 'static> Job<T> {
     /// Blocks until the run in flight ends (tests); false when none was
     /// running or the worker vanished.
     pub fn wait(&mut self) -> bool {
+        self.wait_until(None)
+    }
+
+    /// [`Job::wait`], for `limit` at most: false also when it ran out.
+    pub fn wait_for(&mut self, limit: std::time::Duration) -> bool {
+        self.wait_until(Instant::now().checked_add(limit))
+    }
+
+    fn wait_until(&mut self, deadline: Option<Instant>) -> bool {
         while let JobState::Running(r) = &self.state {
             let run = r.run;
-            match self.rx.recv() {
-                Ok((r, outcome)) => {
+            let received = match deadline {
+                None => self.rx.recv().ok(),
+                Some(d) => self
+                    .rx
+                    .recv_timeout(d.saturating_duration_since(Instant::now()))
+                    .ok(),
+            };
+            match received {
+                Some((r, outcome)) => {
                     if r == run {
                         self.install(r, outcome);
                         return true;
                     }
                 }
-                Err(_) => return false,
+                None => return false,
             }
         }
         false
@@ -366,5 +382,22 @@ mod tests {
         assert!(job.wait(), "the queued work started on take");
         assert_eq!(job.take(), Some(Ok(3)), "only the latest queued work ran");
         assert!(!job.is_running());
+    }
+
+    #[test]
+    fn a_bounded_wait_gives_up_then_sees_the_run_end() {
+        let mut job: Job<u32> = Job::new(None);
+        let (go_tx, go_rx) = channel::<()>();
+        job.start("held", move |_| {
+            let _ = go_rx.recv();
+            Ok(7)
+        });
+        let limit = std::time::Duration::from_millis(50);
+        assert!(!job.wait_for(limit), "the run is held: the wait gives up");
+        assert!(job.is_running());
+        let _ = go_tx.send(());
+        assert!(job.wait_for(std::time::Duration::from_secs(30)));
+        assert_eq!(job.take(), Some(Ok(7)));
+        assert!(!job.wait_for(limit), "nothing running");
     }
 }
