@@ -87,13 +87,12 @@ fn info_prints_format_dims_type_range_histogram_and_memory() {
         "histogram: 10 bins",
         // Counted from the links (no sort): at least the 2242 supernodes.
         "(4220 candidate nodes, 1.6% of the vertices)",
-        // The grouping's peak: the packed order (sized by a counting
-        // pass: under a byte per vertex here) and 7 (the places in 3
-        // bytes, the arcs' vertex lists in 4); the sweeps' 6 and 16 per
-        // candidate, and the merge's 6 and 44 per candidate, stay below
-        // it at 1.6 % candidates.
-        "contour tree 1.9 MiB at its peak",
-        "about 2.2 MiB",
+        // The sweeps' peak: the packed order (sized by a counting pass:
+        // under a byte per vertex here), 6 and 16 per candidate, just
+        // above the grouping's order and 6 (the places and the arcs'
+        // vertex lists in 3 bytes each: 1.9 MiB with the lists in 4).
+        "contour tree 1.8 MiB at its peak",
+        "about 2.1 MiB",
     ] {
         assert!(out.contains(want), "missing '{want}' in\n{out}");
     }

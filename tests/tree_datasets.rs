@@ -131,7 +131,7 @@ fn check_dataset(name: &str) {
     for (a, arc) in tree.arcs().iter().enumerate() {
         let (hi, lo) = (tree.node(arc.upper).vertex, tree.node(arc.lower).vertex);
         assert!(field.is_above(hi, lo), "{name}: arc upside down");
-        let verts = tree.arc_vertices(ArcId(a as u32));
+        let verts = tree.arc_vertices(ArcId(a as u32)).to_vec();
         placed += verts.len();
         for w in verts.windows(2) {
             assert!(

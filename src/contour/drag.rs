@@ -1037,8 +1037,8 @@ impl Slab {
                 if up { &mut slab.new } else { &mut slab.old }.push(x);
             }
             let verts = tree.arc_vertices(x);
-            let start = verts.partition_point(|&v| !above(lo, v));
-            let end = verts.partition_point(|&v| !above(hi, v));
+            let start = verts.partition_point(|v| !above(lo, v));
+            let end = verts.partition_point(|v| !above(hi, v));
             if end > start {
                 slab.ranges.push((x, start, end));
                 slab.flipped += end - start;
@@ -1065,7 +1065,7 @@ impl Slab {
     fn vertices<'t>(&'t self, tree: &'t ContourTree) -> impl Iterator<Item = u32> + 't {
         self.ranges
             .iter()
-            .flat_map(move |&(x, s, e)| tree.arc_vertices(x)[s..e].iter().copied())
+            .flat_map(move |&(x, s, e)| tree.arc_vertices(x).slice(s..e).iter())
             .chain(self.nodes.iter().map(move |&n| tree.node(n).vertex))
     }
 }

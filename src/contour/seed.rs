@@ -151,9 +151,9 @@ fn seed(
     let upper = tree.node(e.upper);
     let regular = tree.arc_vertices(arc);
     // Regular vertices below the cut come first.
-    let split = regular.partition_point(|&v| !iso.is_above(field, v));
+    let split = regular.partition_point(|v| !iso.is_above(field, v));
     let seed = |below: u32, above: u32| PathSeed { arc, below, above };
-    let a_regular = regular.get(split).copied();
+    let a_regular = regular.get(split);
     if let Some(a) = a_regular.or((upper.down == 1).then_some(upper.vertex)) {
         // Any lower neighbour (module doc): the first.
         let b = first_neighbour(field, a, false)?;
@@ -176,7 +176,9 @@ fn seed(
             });
             return found.map(|b| seed(b, upper.vertex));
         }
-        _ => regular[split - 1],
+        _ => regular
+            .get(split - 1)
+            .expect("split is within the regular vertices"),
     };
     let a = first_neighbour(field, b, true)?;
     debug_assert!(iso.is_above(field, a));

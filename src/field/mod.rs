@@ -21,7 +21,7 @@ pub mod synthetic;
 pub use geometry::{Geometry, GeometryError, Space};
 pub use order::{
     NARROW_VERTICES, Order, OrderView, PackedOrder, compact_vertex_order, ids_bytes, narrow_id,
-    order_bytes, sorts_by_counting, vertex_order,
+    order_bytes, sorts_by_counting, vertex_order, wide_id,
 };
 
 use rayon::prelude::*;

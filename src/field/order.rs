@@ -97,7 +97,7 @@ pub fn narrow_id(id: u32) -> [u8; 3] {
 
 /// The id [`narrow_id`] wrote.
 #[inline(always)]
-fn wide_id(b: [u8; 3]) -> u32 {
+pub fn wide_id(b: [u8; 3]) -> u32 {
     u32::from_le_bytes([b[0], b[1], b[2], 0])
 }
 

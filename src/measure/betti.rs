@@ -205,7 +205,7 @@ impl ContourTopology {
                     boundary_edges: 0,
                 }];
                 let (mut chi, mut be) = (0i64, 0i64);
-                for &v in tree.arc_vertices(arc) {
+                for v in tree.arc_vertices(arc) {
                     let (dc, db) = link.deltas(field, dims, v);
                     if dc != 0 || db != 0 {
                         chi += dc;

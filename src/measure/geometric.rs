@@ -206,9 +206,9 @@ impl ArcRegions {
                         .into_par_iter()
                         .flat_map_iter(|arcs| arcs.map(|a| {
                             let vs = tree.arc_vertices(ArcId(a as u32));
-                            let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
+                            let sum: f64 = vs.iter().map(|v| values[v as usize].to_f64()).sum();
                             let (first, last) = match (vs.first(), vs.last()) {
-                                (Some(&f), Some(&l)) => (values[f as usize].to_f64(), values[l as usize].to_f64()),
+                                (Some(f), Some(l)) => (values[f as usize].to_f64(), values[l as usize].to_f64()),
                                 _ => (f64::NAN, f64::NAN),
                             };
                             Regular { count: vs.len() as u64, sum, first, last }
@@ -562,7 +562,7 @@ mod tests {
                 .into_par_iter()
                 .map(|a| {
                     let vs = tree.arc_vertices(ArcId(a as u32));
-                    let sum: f64 = vs.iter().map(|&v| values[v as usize].to_f64()).sum();
+                    let sum: f64 = vs.iter().map(|v| values[v as usize].to_f64()).sum();
                     (vs.len() as u64, sum)
                 })
                 .collect()
@@ -602,7 +602,7 @@ mod tests {
             let count = sub_count[vi] + rc;
             let sum = sub_sum[vi] + rs;
             let (mut lo, mut hi) = (sub_min[vi], sub_max[vi]);
-            if let (Some(&first), Some(&last)) = (vs.first(), vs.last()) {
+            if let (Some(first), Some(last)) = (vs.first(), vs.last()) {
                 lo = lo.min(field.value(first));
                 hi = hi.max(field.value(last));
             }
@@ -659,7 +659,7 @@ mod tests {
             let arc = tree.arc(ArcId(p));
             let vi = v.0 as usize;
             let mut hi = sub_max[vi];
-            if let Some(&last) = tree.arc_vertices(ArcId(p)).last() {
+            if let Some(last) = tree.arc_vertices(ArcId(p)).last() {
                 hi = hi.max(field.value(last));
             }
             if arc.upper == v {

@@ -257,7 +257,7 @@ pub fn arc_extent(
     let mut read = 0usize;
     let mut i = 0usize;
     for &s in chain {
-        for &v in tree.arc_vertices(s) {
+        for v in tree.arc_vertices(s) {
             if i.is_multiple_of(stride) {
                 let v = v as usize;
                 let c = [v % nx, (v / nx) % dims[1], v / nxy];
@@ -438,7 +438,7 @@ mod tests {
                 if let Some(e) = arc_extent(&tree, &sim, field.dims(), a.id, usize::MAX) {
                     assert_eq!(e.vertices as u64, own);
                     for &s in a.chain {
-                        for &v in tree.arc_vertices(s) {
+                        for v in tree.arc_vertices(s) {
                             let c = field.coords(v);
                             for (k, &ck) in c.iter().enumerate() {
                                 assert!(e.min[k] <= ck && ck <= e.max[k]);

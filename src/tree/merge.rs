@@ -128,6 +128,7 @@
 //! and given back slab by slab, so that it and the arcs' vertex lists
 //! hold 4 bytes per vertex together, not 8 ([`group_owned`]).
 
+use super::arc_vertices::{Entry, VertexLists};
 use super::leafward::{self, Leafward, Word, with_entries, with_words};
 use super::sweep::{CANDIDATE, JoinTree, NONE, SplitTree, prefetch};
 use super::{ContourTree, Node, NodeId, Superarc};
@@ -594,7 +595,8 @@ pub(super) const MERGING: Merging = Merging {
 /// above the grouping's 8 and the order, so the merge is the build's peak
 /// and the reduction lowers it (measured when the merge held 44 bytes per
 /// candidate; since session 39 it holds 30-37, and 3.75-4.7 bytes per
-/// vertex beside the records' 6 are still above the grouping's 7). Below that the grouping is the peak
+/// vertex beside the records' 6 are still above the grouping's 7, 6
+/// since its lists narrowed in session 45). Below that the grouping is the peak
 /// (measured on engine, 6 % reduced: 10.5 bytes per vertex either way),
 /// and the two passes over the records would cost time (engine's merge
 /// 0.06 -> 0.10 s) for nothing.
@@ -897,7 +899,7 @@ pub fn group_owned<O: VertexOrder + ?Sized>(placed: Placed, order: Order, values
 pub struct Grouped {
     placed: Placed,
     offsets: Vec<u32>,
-    arc_vertices: Vec<u32>,
+    arc_vertices: VertexLists,
 }
 
 impl Grouped {
@@ -953,20 +955,26 @@ fn group_by_arc<W: Word, O: VertexOrder + ?Sized>(
     vertex_arc: &[W],
     ends: &ArcEnds<'_, O>,
     order: OrderView<'_>,
-) -> (Vec<u32>, Vec<u32>) {
+) -> (Vec<u32>, VertexLists) {
     let threads = rayon::current_num_threads();
     let slab = (order.len() / SLAB_SHARE).clamp(threads * GATHER_CHUNKS, SLAB);
-    group_by_arc_in(vertex_arc, ends, order, slab)
+    if VertexLists::narrows(order.len()) {
+        let (offsets, ids) = group_by_arc_in(vertex_arc, ends, order, slab);
+        (offsets, VertexLists::Narrow(ids))
+    } else {
+        let (offsets, ids) = group_by_arc_in(vertex_arc, ends, order, slab);
+        (offsets, VertexLists::Wide(ids))
+    }
 }
 
 /// [`group_by_arc`], reading the order in slabs of `slab` positions where
-/// it goes by ranges of superarcs.
-fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized>(
+/// it goes by ranges of superarcs, the lists in entries `E`.
+fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized, E: Entry>(
     vertex_arc: &[W],
     ends: &ArcEnds<'_, O>,
     order: OrderView<'_>,
     slab: usize,
-) -> (Vec<u32>, Vec<u32>) {
+) -> (Vec<u32>, Vec<E>) {
     let (n, arcs) = (order.len(), ends.arcs.len());
     let threads = rayon::current_num_threads();
     let chunks = if threads > 1 && arcs * threads * 4 <= n / 16 {
@@ -1003,7 +1011,7 @@ fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized>(
         }
     }
     offsets[arcs] = total;
-    let mut arc_vertices = crate::pages::filled(total as usize, 0u32);
+    let mut arc_vertices = crate::pages::filled(total as usize, E::entry(0));
     let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
     if counts.len() == 1 && threads > 1 {
         let next = counts.pop().expect("one count");
@@ -1035,13 +1043,13 @@ fn group_by_arc_in<W: Word, O: VertexOrder + ?Sized>(
 /// # Safety
 /// Superarc `a`'s slots, from `next[a]` on as many as it has vertices, lie
 /// in `dst` and are no other's.
-unsafe fn scatter_by_arc_ranges<W: Word>(
+unsafe fn scatter_by_arc_ranges<W: Word, E: Entry>(
     order: OrderView<'_>,
     vertex_arc: &[W],
     offsets: &[u32],
     mut next: Vec<u32>,
     slab: usize,
-    dst: &crate::pages::DisjointSlots<'_, u32>,
+    dst: &crate::pages::DisjointSlots<'_, E>,
 ) {
     let (n, arcs) = (order.len(), next.len());
     let total = offsets[arcs];
@@ -1097,7 +1105,7 @@ unsafe fn scatter_by_arc_ranges<W: Word>(
                         let slot = &mut next[i as usize];
                         // SAFETY: superarc `first + i`'s slots are the
                         // caller's for it, written by this range's thread.
-                        unsafe { dst.write(*slot as usize, p as u32) };
+                        unsafe { dst.write(*slot as usize, E::entry(p as u32)) };
                         *slot += 1;
                     }
                 }
@@ -1197,7 +1205,7 @@ fn group_by_arc_consuming<W: Word>(
     vertex_arc: &[W],
     arcs: usize,
     order: Order,
-) -> (Vec<u32>, Vec<u32>) {
+) -> (Vec<u32>, VertexLists) {
     // Where an id and a superarc (or `arcs` for a node) fit in one word
     // together, the count writes each position's superarc beside its id,
     // so that the scatter reads the slab in sequence instead of looking
@@ -1205,17 +1213,24 @@ fn group_by_arc_consuming<W: Word>(
     // superarcs are few.
     let id_bits = usize::BITS - (order.view().len().max(2) - 1).leading_zeros();
     let fits = id_bits < u32::BITS && (arcs as u64) < 1 << (u32::BITS - id_bits);
-    group_by_arc_in_slabs(vertex_arc, arcs, order, fits.then_some(id_bits))
+    let packed = fits.then_some(id_bits);
+    if VertexLists::narrows(order.view().len()) {
+        let (offsets, ids) = group_by_arc_in_slabs(vertex_arc, arcs, order, packed);
+        (offsets, VertexLists::Narrow(ids))
+    } else {
+        let (offsets, ids) = group_by_arc_in_slabs(vertex_arc, arcs, order, packed);
+        (offsets, VertexLists::Wide(ids))
+    }
 }
 
 /// [`group_by_arc_consuming`], each slab's superarcs written beside its
 /// ids where `packed` gives the ids' bits.
-fn group_by_arc_in_slabs<W: Word>(
+fn group_by_arc_in_slabs<W: Word, E: Entry>(
     vertex_arc: &[W],
     arcs: usize,
     mut order: Order,
     packed: Option<u32>,
-) -> (Vec<u32>, Vec<u32>) {
+) -> (Vec<u32>, Vec<E>) {
     let n = order.view().len();
     let sizes = arc_sizes(vertex_arc, arcs);
     let mut offsets = vec![0u32; arcs + 1];
@@ -1224,7 +1239,7 @@ fn group_by_arc_in_slabs<W: Word>(
     }
     drop(sizes);
     // Zeroed lazily (fresh pages): only what is written is held.
-    let mut arc_vertices = vec![0u32; offsets[arcs] as usize];
+    let mut arc_vertices = vec![E::entry(0); offsets[arcs] as usize];
     let dst = crate::pages::DisjointSlots::new(&mut arc_vertices);
     let mut free_end: Vec<u32> = offsets[1..].to_vec();
     let chunks = CONSUMING_CHUNKS * rayon::current_num_threads();
@@ -1441,12 +1456,12 @@ fn count_and_pack<W: Word>(
 /// # Safety
 /// As for [`scatter_ranges`], with the chunks of `per` positions of `slab`
 /// as the ranges.
-unsafe fn scatter_packed(
+unsafe fn scatter_packed<E: Entry>(
     slab: &[u32],
     per: usize,
     id_bits: u32,
     starts: Vec<Vec<u32>>,
-    dst: &crate::pages::DisjointSlots<'_, u32>,
+    dst: &crate::pages::DisjointSlots<'_, E>,
 ) {
     let id = (1u32 << id_bits) - 1;
     slab.par_chunks(per)
@@ -1455,7 +1470,7 @@ unsafe fn scatter_packed(
             for &w in words {
                 if let Some(slot) = fill.get_mut((w >> id_bits) as usize) {
                     // SAFETY: the caller's (chunk, arc) slots are its own.
-                    unsafe { dst.write(*slot as usize, w & id) };
+                    unsafe { dst.write(*slot as usize, E::entry(w & id)) };
                     *slot += 1;
                 }
             }
@@ -1469,12 +1484,12 @@ unsafe fn scatter_packed(
 /// # Safety
 /// The slots each (range, arc) writes, from its start on as many as the
 /// range has vertices on the arc, lie in `dst` and are no other's.
-unsafe fn scatter_ranges<W: Word>(
+unsafe fn scatter_ranges<W: Word, E: Entry>(
     order: OrderView<'_>,
     vertex_arc: &[W],
     ranges: Vec<std::ops::Range<usize>>,
     starts: Vec<Vec<u32>>,
-    dst: &crate::pages::DisjointSlots<'_, u32>,
+    dst: &crate::pages::DisjointSlots<'_, E>,
 ) {
     ranges
         .into_par_iter()
@@ -1483,7 +1498,7 @@ unsafe fn scatter_ranges<W: Word>(
             for_each_arc(order, vertex_arc, range, |v, a| {
                 let slot = &mut fill[a as usize];
                 // SAFETY: the caller's (range, arc) slots are its own.
-                unsafe { dst.write(*slot as usize, v) };
+                unsafe { dst.write(*slot as usize, E::entry(v)) };
                 *slot += 1;
             });
         });
@@ -1605,7 +1620,8 @@ mod tests {
             // From a narrow order (3 bytes per id), its slabs widened.
             let narrow = || Order::Narrow(order.iter().map(|&v| crate::field::narrow_id(v)).collect());
             prop_assert_eq!(&whole, &group_by_arc_consuming(&vertex_arc, arcs, narrow()));
-            prop_assert_eq!(&whole, &group_by_arc_in_slabs(&vertex_arc, arcs, narrow(), None));
+            let (o, ids) = group_by_arc_in_slabs(&vertex_arc, arcs, narrow(), None);
+            prop_assert_eq!(&whole, &(o, VertexLists::Narrow(ids)));
             // From the places packed in 3 bytes each, as a tree keeps them.
             let mut places = Leafward::zeroed(n, true);
             with_words!(&mut places, w => w.iter_mut().zip(&vertex_arc).for_each(|(w, &x)| *w = Word::of(x)));
@@ -1617,14 +1633,16 @@ mod tests {
             prop_assert_eq!(&whole, &from_packed.0);
             prop_assert_eq!(&whole, &from_packed.1);
             // Read back from the order itself, not written beside the ids.
-            let unpacked = group_by_arc_in_slabs(&vertex_arc, arcs, Order::Ids(order.clone()), None);
-            prop_assert_eq!(&whole, &unpacked);
+            // The lists in 4 bytes per id (meshes of more than 2^24
+            // vertices), as the 3-byte lists.
+            let (o, ids) = group_by_arc_in_slabs::<_, u32>(&vertex_arc, arcs, Order::Ids(order.clone()), None);
+            prop_assert_eq!(&whole, &(o, VertexLists::of_ids(ids, n)));
             // Read in slabs by ranges of superarcs on 5 threads.
             let slab = 1 + (hash(7) % 300) as usize;
             let by_ranges = rayon::ThreadPoolBuilder::new().num_threads(5).build().expect("a pool of 5 threads").install(|| {
-                group_by_arc_in(&vertex_arc, &ends, OrderView::Ids(&order), slab)
+                group_by_arc_in::<_, _, u32>(&vertex_arc, &ends, OrderView::Ids(&order), slab)
             });
-            prop_assert_eq!(&whole, &by_ranges);
+            prop_assert_eq!(&whole, &(by_ranges.0, VertexLists::of_ids(by_ranges.1, n)));
             // Counted by the superarcs' spans on 3 threads: the counts of
             // the pass through the order.
             let ranges: Vec<std::ops::Range<usize>> = (0..n.div_ceil(97)).map(|c| c * 97..(c * 97 + 97).min(n)).collect();
@@ -1638,7 +1656,7 @@ mod tests {
             let (offsets, verts) = consumed;
             for a in 0..arcs {
                 let expect: Vec<u32> = order.iter().copied().filter(|&v| vertex_arc[v as usize] == a as u32).collect();
-                prop_assert_eq!(&verts[offsets[a] as usize..offsets[a + 1] as usize], &expect[..]);
+                prop_assert_eq!(verts.slice(offsets[a] as usize..offsets[a + 1] as usize).to_vec(), expect);
             }
         }
     }

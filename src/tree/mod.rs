@@ -24,7 +24,8 @@
 //! visits it: the union-find lives on the candidates); merge and
 //! placement the order and the two leafward records, the first of which
 //! becomes `vertex_arc`; the grouping the order, `vertex_arc` and the
-//! arcs' vertex lists (an order of ids given back as it is read, so 7 in
+//! arcs' vertex lists (3 bytes per id for at most 2^24 vertices, else 4:
+//! [`arc_vertices`]; an order of ids given back as it is read, so 7 in
 //! all). The records are held in 3 bytes per vertex each from the link
 //! pass on when there are fewer than 2^23 candidates ([`leafward`]): 6
 //! bytes per vertex through the sweeps, the merge and the placement,
@@ -68,9 +69,10 @@
 //! [`sweep::Census::supernodes_at_most`], 0.1-2 % above the real number on
 //! the shared scans; half the candidates before session 42), and
 //! [`check_merge_memory`] again with their real number once the sweeps are
-//! done. The finished tree keeps 7 bytes per vertex (`vertex_arc` in 3, and
-//! `arc_vertices` 4 per regular vertex; 8 where the records did not pack)
-//! plus 28 per supernode: 11.15 on tooth. Keeping the places in 3 bytes
+//! done. The finished tree keeps 6 bytes per vertex (`vertex_arc` in 3, and
+//! `arc_vertices` 3 per regular vertex; 4 each where the records did not
+//! pack or the vertices are more than 2^24) plus about 28 per supernode:
+//! 10.3 on tooth (11.15 with 4-byte lists, before session 45). Keeping the places in 3 bytes
 //! (session 38) took the peaks of `flexiso bench` about a byte per vertex
 //! lower on every scan whose peak was the placement or the grouping
 //! (colin27_ch2 9.7-9.8 → 8.5-8.8, colin27_ch2better 8.8-8.9 → 7.5),
@@ -90,6 +92,7 @@
 //! (a 256³ volume, float or 16-bit) held in 3 bytes each took it to
 //! 16.4-16.5 and `synthetic:256` from 10.3 to 9.3.
 
+mod arc_vertices;
 pub mod blocks;
 pub mod json;
 pub mod leafward;
@@ -102,6 +105,8 @@ mod vertex_merge;
 use crate::field::{Order, OrderView, ScalarField, VertexOrder};
 use crate::mesh::Mesh;
 use crate::progress::{Cancelled, Progress};
+use arc_vertices::VertexLists;
+pub use arc_vertices::{ArcVertices, Iter as ArcVerticesIter};
 use leafward::{Leafward, Word};
 use merge::NODE_FLAG;
 use std::time::{Duration, Instant};
@@ -198,9 +203,10 @@ pub struct ContourTree {
     /// the first of them, written over by the placement).
     vertex_arc: Leafward,
     /// Regular vertices of arc `a`: `arc_vertices[arc_offsets[a]..arc_offsets[a+1]]`,
-    /// ascending in the vertex order.
+    /// ascending in the vertex order (in 3 bytes each for at most 2^24
+    /// vertices: [`arc_vertices`]).
     arc_offsets: Vec<u32>,
-    arc_vertices: Vec<u32>,
+    arc_vertices: VertexLists,
     /// Arcs at node `v`: `node_arcs[node_offsets[v]..]`, the up arcs first.
     node_offsets: Vec<u32>,
     node_arcs: Vec<ArcId>,
@@ -359,7 +365,7 @@ fn after_sweeps_bytes(
     } else {
         0
     };
-    let grouping = order_bytes + tree_bytes(candidates) * n as u64;
+    let grouping = order_bytes + tree_bytes(n, candidates) * n as u64;
     let sort = if order == OrderAtMerge::Kept {
         0
     } else {
@@ -396,9 +402,10 @@ fn records_bytes(candidates: usize) -> u64 {
 }
 
 /// The finished tree's bytes per vertex: its place (the first record's
-/// entry, 3 bytes packed, else 4) and the arcs' vertex lists (4).
-fn tree_bytes(candidates: usize) -> u64 {
-    records_bytes(candidates) / 2 + 4
+/// entry, 3 bytes packed, else 4) and the arcs' vertex lists (3 for at
+/// most 2^24 vertices, else 4: [`arc_vertices`]).
+fn tree_bytes(n: usize, candidates: usize) -> u64 {
+    records_bytes(candidates) / 2 + VertexLists::bytes_per_vertex(n)
 }
 
 /// What the candidates' tables hold at the merge's peak: the merge's
@@ -531,7 +538,10 @@ pub enum OrderAtMerge {
 /// order's cost comes off the peak. With packed records ([`leafward`])
 /// that takes the
 /// merge's tables above a byte per vertex (the merge's 6 bytes per vertex
-/// and its tables above the grouping's 7): more than 1/37.5 of the
+/// and its tables above the grouping's 7, whose lists now take 3 bytes per
+/// id where the vertices are at most 2^24, so that the tables' whole
+/// byte per vertex comes off, at least the packed 8-bit order's
+/// cost): more than 1/37.5 of the
 /// vertices as candidates, with half of them supernodes (at most twice
 /// the extrema, [`sweep::Census::supernodes_at_most`]; [`merge_bytes`];
 /// 1/44 before session 39, 1/22 while the grouping held 8, before session
@@ -863,6 +873,7 @@ impl ContourTree {
         arc_offsets: Vec<u32>,
         arc_vertices: Vec<u32>,
     ) -> Self {
+        let arc_vertices = VertexLists::of_ids(arc_vertices, vertex_arc.len());
         let vertex_arc = Leafward::Words(vertex_arc);
         Self::assemble_places(nodes, arcs, vertex_arc, arc_offsets, arc_vertices)
     }
@@ -873,7 +884,7 @@ impl ContourTree {
         arcs: Vec<Superarc>,
         mut vertex_arc: Leafward,
         arc_offsets: Vec<u32>,
-        arc_vertices: Vec<u32>,
+        arc_vertices: VertexLists,
     ) -> Self {
         // Canonical arc order: by lower node, then upper node. Renumber.
         if arcs.is_sorted_by_key(|a| (a.lower, a.upper)) {
@@ -888,13 +899,22 @@ impl ContourTree {
         }
         let sorted_arcs: Vec<Superarc> = perm.iter().map(|&a| arcs[a as usize]).collect();
         let mut offsets = vec![0u32; arcs.len() + 1];
-        let mut verts = Vec::with_capacity(arc_vertices.len());
         for (new, &old) in perm.iter().enumerate() {
-            let r = arc_offsets[old as usize] as usize..arc_offsets[old as usize + 1] as usize;
-            verts.extend_from_slice(&arc_vertices[r]);
-            offsets[new + 1] = verts.len() as u32;
+            offsets[new + 1] =
+                offsets[new] + arc_offsets[old as usize + 1] - arc_offsets[old as usize];
         }
-        drop(arc_vertices);
+        fn regroup<T: Copy>(ids: Vec<T>, perm: &[u32], old_offsets: &[u32]) -> Vec<T> {
+            let mut out = Vec::with_capacity(ids.len());
+            for &old in perm {
+                let r = old_offsets[old as usize] as usize..old_offsets[old as usize + 1] as usize;
+                out.extend_from_slice(&ids[r]);
+            }
+            out
+        }
+        let verts = match arc_vertices {
+            VertexLists::Wide(ids) => VertexLists::Wide(regroup(ids, &perm, &arc_offsets)),
+            VertexLists::Narrow(ids) => VertexLists::Narrow(regroup(ids, &perm, &arc_offsets)),
+        };
         leafward::with_words!(&mut vertex_arc, places => for va in places.iter_mut() {
             let place = Word::get(*va);
             if place & NODE_FLAG == 0 {
@@ -910,7 +930,7 @@ impl ContourTree {
         sorted_arcs: Vec<Superarc>,
         vertex_arc: Leafward,
         offsets: Vec<u32>,
-        verts: Vec<u32>,
+        verts: VertexLists,
     ) -> Self {
         // Node adjacency: up arcs (where the node is the lower end) first,
         // filled with no cursor array beside the offsets. Node `i`'s offset
@@ -982,9 +1002,10 @@ impl ContourTree {
 
     /// The regular vertices of a superarc, ascending in the vertex order
     /// (its ends, the supernodes, are not included).
-    pub fn arc_vertices(&self, id: ArcId) -> &[u32] {
+    pub fn arc_vertices(&self, id: ArcId) -> ArcVertices<'_> {
         let a = id.0 as usize;
-        &self.arc_vertices[self.arc_offsets[a] as usize..self.arc_offsets[a + 1] as usize]
+        self.arc_vertices
+            .slice(self.arc_offsets[a] as usize..self.arc_offsets[a + 1] as usize)
     }
 
     /// Where vertex `v` lies: on a superarc or at a supernode.
@@ -1051,8 +1072,8 @@ impl ContourTree {
         self.nodes.capacity() * size_of::<Node>()
             + self.arcs.capacity() * size_of::<Superarc>()
             + self.vertex_arc.heap_bytes()
+            + self.arc_vertices.heap_bytes()
             + (self.arc_offsets.capacity()
-                + self.arc_vertices.capacity()
                 + self.node_offsets.capacity()
                 + self.node_arcs.capacity())
                 * 4
@@ -1120,9 +1141,12 @@ mod tests {
         assert_eq!(peak(k, 20_000, Some(glue)), (glue, true));
         // Where it does not fit, the build sweeps in one block.
         assert_eq!(peak(k, 20_000, Some(glue - 1)), (whole, false));
-        // Few candidates (a smooth field): the whole sweep's peak stands.
+        // Few candidates (a smooth field): the glue's peak is just above
+        // the whole build's (the grouping's order, places and lists in 3
+        // bytes each: the sweeps' order and 6).
         let smooth = peak_bytes(n, half(100), order, OrderAtMerge::Kept);
-        assert_eq!(peak(100, 2_000, None), (smooth, true));
+        let glue = order + 6 * n as u64 + glue_bytes(100, 2_000);
+        assert_eq!(peak(100, 2_000, None), (smooth.max(glue), true));
     }
 
     #[test]
@@ -1307,9 +1331,13 @@ mod tests {
                 assert!(remade < held, "{k}");
                 assert!(held - remade <= order_bytes, "{k}");
             }
+            // Below, less than a byte per vertex would come off (none
+            // without candidates).
             for k in [0, n / 64, n / 50, n / 40] {
                 let held = peak_bytes(n, half(k), order_bytes, kept);
-                assert_eq!(held, peak_bytes(n, half(k), order_bytes, counted), "{k}");
+                let remade = peak_bytes(n, half(k), order_bytes, counted);
+                assert!(held - remade < n as u64, "{k}");
+                assert_eq!(k == 0, held == remade, "{k}");
             }
             let (k, order_bytes) = (huge / 50, per_vertex * huge as u64);
             assert!(

@@ -109,7 +109,7 @@ pub fn augmented_edges(tree: &ContourTree) -> Vec<(usize, usize)> {
         chain.extend(
             tree.arc_vertices(ArcId(a as u32))
                 .iter()
-                .map(|&v| v as usize),
+                .map(|v| v as usize),
         );
         chain.push(tree.node(arc.upper).vertex as usize);
         for w in chain.windows(2) {
@@ -291,7 +291,7 @@ pub fn check_against_oracles(field: &ScalarField, tree: &ContourTree) {
     };
     assert_eq!(tree_label, 1, "augmented tree is connected");
     for (a, _) in tree.arcs().iter().enumerate() {
-        for &v in tree.arc_vertices(ArcId(a as u32)) {
+        for v in tree.arc_vertices(ArcId(a as u32)) {
             assert_eq!(tree.place(v), VertexPlace::Arc(ArcId(a as u32)));
         }
     }
