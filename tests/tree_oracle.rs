@@ -412,3 +412,44 @@ fn tree_is_the_same_on_every_thread_count() {
         }
     }
 }
+
+/// Above 2^24 vertices the arcs' vertex lists keep 4 bytes per id (below,
+/// 3: every other test): on an image of 4097 x 4096 ramps, every regular
+/// vertex lies in the list of the superarc its place names, once, the
+/// lists ascending in the vertex order, and the others are supernodes.
+#[test]
+fn the_vertex_lists_of_a_mesh_above_2_24_vertices_are_in_words() {
+    use flexiso::tree::{ArcVertices, VertexPlace};
+    let (w, h) = (4097usize, 4096usize);
+    let values: Vec<u8> = (0..w * h)
+        .map(|i| ((i % w) / 61 * 3 + (i / w) / 53 * 5) as u8)
+        .collect();
+    let field = grid([w, h, 1], values);
+    let n = field.len();
+    assert!(n > 1 << 24);
+    let tree = build(&field);
+    assert!(tree.arcs().len() > 100, "{} arcs", tree.arcs().len());
+    let mut seen = vec![false; n];
+    for a in 0..tree.arcs().len() as u32 {
+        let vs = tree.arc_vertices(ArcId(a));
+        assert!(matches!(vs, ArcVertices::Wide(_)));
+        let mut below = tree.node(tree.arc(ArcId(a)).lower).vertex;
+        for v in vs {
+            assert_eq!(tree.place(v), VertexPlace::Arc(ArcId(a)), "vertex {v}");
+            assert!(
+                !std::mem::replace(&mut seen[v as usize], true),
+                "vertex {v} twice"
+            );
+            assert!(field.is_above(v, below), "arc {a} not ascending at {v}");
+            below = v;
+        }
+        assert!(field.is_above(tree.node(tree.arc(ArcId(a)).upper).vertex, below));
+    }
+    for (v, seen) in seen.iter().enumerate() {
+        assert_eq!(
+            *seen,
+            !matches!(tree.place(v as u32), VertexPlace::Node(_)),
+            "vertex {v}"
+        );
+    }
+}
