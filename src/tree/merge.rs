@@ -126,7 +126,9 @@
 //! vertices in value order; it only reads their superarc). An order of 4
 //! bytes per vertex that the grouping owns is read from its end in slabs
 //! and given back slab by slab, so that it and the arcs' vertex lists
-//! hold 4 bytes per vertex together, not 8 ([`group_owned`]).
+//! hold 4 bytes per vertex together, not 8 ([`group_owned`]); 3, not 6,
+//! for at most 2^24 vertices, whose order and lists both take 3 bytes per
+//! id ([`super::ArcVertices`]).
 
 use super::arc_vertices::{Entry, VertexLists};
 use super::leafward::{self, Leafward, Word, with_entries, with_words};
@@ -1196,8 +1198,9 @@ fn arc_sizes<W: Word>(vertex_arc: &[W], arcs: usize) -> Vec<u32> {
 /// [`group_by_arc`] for an order the grouping owns: read from its end in
 /// [`SLABS`] slabs, each slab's pages given back once it is grouped, so
 /// that the order and the arcs' vertex lists (whose pages are touched as
-/// they are written) hold about 4 bytes per vertex together, not 8 (7
-/// for a narrow order, whose slabs are widened one at a time): on a
+/// they are written) hold about 4 bytes per vertex together, not 8 (3,
+/// not 6, for a narrow order, whose slabs are widened one at a time,
+/// beside the 3-byte lists of a mesh of at most 2^24 vertices): on a
 /// float field, whose order is not remade, that
 /// was the build's peak. Each arc's slots fill from its end down, slab by
 /// slab and, within a slab, chunk by chunk from the last: the same layout.

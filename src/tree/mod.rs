@@ -25,7 +25,7 @@
 //! placement the order and the two leafward records, the first of which
 //! becomes `vertex_arc`; the grouping the order, `vertex_arc` and the
 //! arcs' vertex lists (3 bytes per id for at most 2^24 vertices, else 4:
-//! [`arc_vertices`]; an order of ids given back as it is read, so 7 in
+//! [`ArcVertices`]; an order of ids given back as it is read, so 7 in
 //! all). The records are held in 3 bytes per vertex each from the link
 //! pass on when there are fewer than 2^23 candidates ([`leafward`]): 6
 //! bytes per vertex through the sweeps, the merge and the placement,
@@ -204,7 +204,7 @@ pub struct ContourTree {
     vertex_arc: Leafward,
     /// Regular vertices of arc `a`: `arc_vertices[arc_offsets[a]..arc_offsets[a+1]]`,
     /// ascending in the vertex order (in 3 bytes each for at most 2^24
-    /// vertices: [`arc_vertices`]).
+    /// vertices: [`ArcVertices`]).
     arc_offsets: Vec<u32>,
     arc_vertices: VertexLists,
     /// Arcs at node `v`: `node_arcs[node_offsets[v]..]`, the up arcs first.
@@ -403,7 +403,7 @@ fn records_bytes(candidates: usize) -> u64 {
 
 /// The finished tree's bytes per vertex: its place (the first record's
 /// entry, 3 bytes packed, else 4) and the arcs' vertex lists (3 for at
-/// most 2^24 vertices, else 4: [`arc_vertices`]).
+/// most 2^24 vertices, else 4: [`ArcVertices`]).
 fn tree_bytes(n: usize, candidates: usize) -> u64 {
     records_bytes(candidates) / 2 + VertexLists::bytes_per_vertex(n)
 }
